@@ -1,0 +1,51 @@
+#pragma once
+// Defect models: what can be wrong with the glass. Each is an analytic shape; DefectSolid.h turns
+// it into tagged analytic surfaces and a tool mesh, SolidBuilder.h subtracts it from the object.
+//
+// Bubble: an air void, a sphere or an oriented ellipsoid. Enclosed unless `surface_breaking`,
+//   in which case it must cross the glass boundary and becomes an open pit.
+// Scratch: a groove of `width` and `depth` (mm) with a V or U cross-section, cut into the front or
+//   back face along a path on that face: a straight scratch follows the face's geodesic between
+//   two points (a great circle on a sphere, a segment on a plane); an arc scratch follows the
+//   circle of points at 3D distance `radius` from a centre point on the face. The V profile is a
+//   triangle with its apex at `depth`; the U profile is a circular arc bottom (radius
+//   (w^2/4 + d^2) / (2 d) when d <= w/2; a semicircle of radius w/2 under straight walls when
+//   d > w/2). Ends are flat, perpendicular to the path.
+// Particle: an opaque absorbing inclusion (sphere or ellipsoid) strictly inside the glass, kept as
+//   its own closed component of the mesh.
+#include <string>
+
+#include "geometry/Vec3.h"
+
+namespace ltm {
+
+enum class DefectType { Bubble, Scratch, Particle };
+enum class ScratchProfile { V, U };
+const char* to_string(DefectType t);
+
+struct Defect {
+    DefectType type = DefectType::Bubble;
+
+    // Bubble and Particle: an ellipsoid with body axes the columns of `frame`.
+    Vec3 center;
+    Vec3 semi_axes{0.1, 0.1, 0.1};
+    Mat3 frame;
+    bool surface_breaking = false;  // Bubble only
+
+    // Scratch.
+    int side = 0;                   // 0: front face, 1: back face
+    bool arc = false;
+    Vec3 start, end;                // straight: end points (x, y used; z checked if given)
+    bool start_has_z = false, end_has_z = false;
+    Vec3 arc_center;                // arc: centre point (x, y; z checked if given)
+    bool arc_center_has_z = false;
+    double arc_radius = 0;          // mm, 3D distance from the centre point
+    double start_angle = 0, end_angle = 0;  // degrees, right-handed about +z from +x
+    double width = 0.05, depth = 0.02;
+    ScratchProfile profile = ScratchProfile::V;
+
+    bool is_sphere() const { return semi_axes.x == semi_axes.y && semi_axes.y == semi_axes.z; }
+    double max_semi_axis() const;
+};
+
+}  // namespace ltm

@@ -1,0 +1,42 @@
+#pragma once
+// From a defect model to geometry: its placement checks against the object, its analytic
+// surfaces (added to the SurfaceTable) and its tool mesh for the Boolean.
+#include <string>
+#include <vector>
+
+#include "defects/Defect.h"
+#include "geometry/Lens.h"
+#include "geometry/SurfaceTable.h"
+#include "geometry/TriMesh.h"
+
+namespace ltm {
+
+// Why a defect cannot be placed in this object. `key` is relative to the defect's own mapping
+// (e.g. "radius", "center", "start"), so the scene loader can report `defects[2].center`.
+struct DefectProblem {
+    std::string key, message;
+};
+std::vector<DefectProblem> defect_problems(const Lens& lens, const Defect& d);
+
+// Clearance of an ellipsoid (or sphere) from the glass boundary: the smallest gap between it and
+// any face, positive when it lies strictly inside the glass, <= 0 when it touches or crosses it.
+// Exact for spheres (patch distances) and for ellipsoids against planes, spheres and the rim
+// (farthest / closest point of the ellipsoid by Eberly's secular equation).
+double ellipsoid_clearance(const Lens& lens, const Vec3& centre, const Mat3& frame, const Vec3& semi_axes);
+
+struct DefectSolid {
+    TriMesh tool;              // closed, outward; its tags index the table
+    double chord_error = 0;    // bound on the tool's face-to-surface distance, mm
+    double clearance = 0;      // bubbles and particles: ellipsoid_clearance; scratches: -1
+    Aabb bounds;
+    std::vector<int> tags;     // the table entries this defect added
+};
+
+// Adds the defect's surfaces to `table` (named "<type> <index> ...") and tessellates its tool
+// with chord error <= tolerance.
+DefectSolid make_defect_solid(const Lens& lens, const Defect& d, int index, double tolerance, SurfaceTable& table);
+
+// The chord tolerance for a defect's tool: min(object tolerance, relative x its smallest size).
+double defect_tolerance(const Defect& d, double object_tolerance, double relative);
+
+}  // namespace ltm

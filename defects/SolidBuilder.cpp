@@ -1,0 +1,130 @@
+#include "defects/SolidBuilder.h"
+
+#include <algorithm>
+#include <fmt/format.h>
+#include <stdexcept>
+
+#include "defects/DefectSolid.h"
+#include "geometry/Boolean.h"
+#include "geometry/Tessellate.h"
+
+namespace ltm {
+
+SurfaceTable object_surfaces(const Lens& lens) {
+    SurfaceTable t;
+    SurfaceInfo front{lens.front_surface(), "front", SurfaceRole::Front, -1, Medium::Glass, Medium::Air,
+                      lens.front_normal_sign()};
+    SurfaceInfo back{lens.back_surface(), "back", SurfaceRole::Back, -1, Medium::Glass, Medium::Air,
+                     lens.back_normal_sign()};
+    SurfaceInfo rim{lens.rim_surface(), "rim", SurfaceRole::Rim, -1, Medium::Glass, Medium::Air, +1};
+    t.add(front);
+    t.add(back);
+    t.add(rim);
+    return t;
+}
+
+namespace {
+
+// Greedy grouping of tools whose bounding boxes do not overlap: each group is one corefinement
+// (CGAL needs the tool to be free of self-intersections, which disjoint components guarantee).
+std::vector<std::vector<size_t>> disjoint_groups(const std::vector<Aabb>& boxes, double margin) {
+    std::vector<std::vector<size_t>> groups;
+    std::vector<Aabb> group_boxes;
+    for (size_t i = 0; i < boxes.size(); ++i) {
+        bool placed = false;
+        for (size_t g = 0; g < groups.size() && !placed; ++g) {
+            bool clash = false;
+            for (size_t j : groups[g]) clash = clash || boxes[i].overlaps(boxes[j], margin);
+            if (!clash) {
+                groups[g].push_back(i);
+                placed = true;
+            }
+        }
+        if (!placed) groups.push_back({i});
+    }
+    return groups;
+}
+
+}  // namespace
+
+Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt, StageReport* report) {
+    Solid s;
+    s.surfaces = object_surfaces(lens);
+
+    StageTimer t_tess(report, "tessellate");
+    LensTessellation lt = tessellate_lens(lens, opt.chord_tolerance, kTagFront, kTagBack, kTagRim);
+    s.object_chord_error = lt.chord_error;
+    t_tess.done(fmt::format("{} triangles, {} rings, chord error {:.3g} mm", lt.mesh.num_triangles(), lt.rings,
+                            lt.chord_error));
+    if (defects.empty()) {
+        s.mesh = std::move(lt.mesh);
+        return s;
+    }
+
+    StageTimer t_tools(report, "defect-tools");
+    std::vector<DefectSolid> tools;
+    size_t tool_triangles = 0;
+    for (size_t k = 0; k < defects.size(); ++k) {
+        const double tol = defect_tolerance(defects[k], opt.chord_tolerance, opt.defect_relative_tolerance);
+        tools.push_back(make_defect_solid(lens, defects[k], static_cast<int>(k), tol, s.surfaces));
+        s.max_defect_chord_error = std::max(s.max_defect_chord_error, tools.back().chord_error);
+        tool_triangles += tools.back().tool.num_triangles();
+    }
+    t_tools.done(fmt::format("{} defects, {} tool triangles", defects.size(), tool_triangles));
+
+    // A defect is enclosed when it stays clear of the glass boundary and of every other defect by
+    // more than both tessellations' chord errors: its inscribed tool mesh then cannot touch the
+    // object mesh, and appending the reversed tool is exactly what the Boolean would produce.
+    std::vector<bool> touches_other(defects.size(), false);
+    for (size_t i = 0; i < tools.size(); ++i)
+        for (size_t j = i + 1; j < tools.size(); ++j) {
+            const double margin = tools[i].chord_error + tools[j].chord_error;
+            if (tools[i].bounds.overlaps(tools[j].bounds, margin)) touches_other[i] = touches_other[j] = true;
+        }
+    std::vector<size_t> cutters;
+    TriMesh appended;
+    for (size_t k = 0; k < defects.size(); ++k) {
+        const bool clear = tools[k].clearance > s.object_chord_error + tools[k].chord_error && !touches_other[k];
+        if (defects[k].type == DefectType::Particle) {
+            if (!clear)
+                throw std::invalid_argument(fmt::format(
+                    "defects[{}]: the particle is within the tessellation's chord error of the glass boundary or "
+                    "another defect (clearance {:.3g} mm); move it or lower mesh.chord_tolerance",
+                    k, tools[k].clearance));
+            appended.append(tools[k].tool, /*flip=*/false);
+        } else if (clear && !opt.always_boolean) {
+            appended.append(tools[k].tool, /*flip=*/true);
+            ++s.enclosed_defects;
+        } else {
+            cutters.push_back(k);
+        }
+    }
+
+    TriMesh body = std::move(lt.mesh);
+    if (!cutters.empty()) {
+        StageTimer t_bool(report, "boolean");
+        std::vector<Aabb> boxes;
+        for (size_t k : cutters) boxes.push_back(tools[k].bounds);
+        const auto groups = disjoint_groups(boxes, s.max_defect_chord_error);
+        std::vector<TriMesh> group_meshes;
+        for (const auto& g : groups) {
+            TriMesh merged;
+            for (size_t i : g) merged.append(tools[cutters[i]].tool);
+            group_meshes.push_back(std::move(merged));
+        }
+        const size_t before = body.num_triangles();
+        body = subtract(body, group_meshes);
+        s.boolean_operations = static_cast<int>(groups.size());
+        t_bool.done(fmt::format("{} defects in {} corefinement(s), {} -> {} triangles", cutters.size(), groups.size(),
+                                before, body.num_triangles()));
+    }
+    body.append(appended);
+    s.mesh = std::move(body);
+    if (report)
+        report->add("assemble", 0.0,
+                    fmt::format("{} triangles, {} enclosed defect(s) appended without a Boolean", s.mesh.num_triangles(),
+                                s.enclosed_defects));
+    return s;
+}
+
+}  // namespace ltm

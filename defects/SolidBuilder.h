@@ -1,0 +1,44 @@
+#pragma once
+// Builds the object solid with its defects: the tagged triangle mesh and the surface table that
+// every later stage uses. Stages and their times go into a StageReport.
+#include <vector>
+
+#include "defects/Defect.h"
+#include "geometry/Lens.h"
+#include "geometry/StageReport.h"
+#include "geometry/SurfaceTable.h"
+#include "geometry/TriMesh.h"
+
+namespace ltm {
+
+struct MeshOptions {
+    double chord_tolerance = 1e-3;            // mm: max face-to-surface distance of the object
+    double defect_relative_tolerance = 0.01;  // tools: chord error <= this x their smallest size
+    bool always_boolean = false;              // corefine even strictly enclosed defects
+};
+
+struct Solid {
+    TriMesh mesh;              // glass boundary (outer shell, cavity walls) + particle components
+    SurfaceTable surfaces;     // mesh.tags index this
+    double object_chord_error = 0;  // measured, mm
+    double max_defect_chord_error = 0;
+    int boolean_operations = 0;
+    int enclosed_defects = 0;  // appended as reversed shells without a Boolean
+};
+
+// Tags 0, 1, 2 are always the front, back and rim.
+constexpr int kTagFront = 0, kTagBack = 1, kTagRim = 2;
+
+// The analytic surfaces of the object and all defects, without any meshing (what a tracer that
+// uses analytic primitives needs).
+SurfaceTable object_surfaces(const Lens& lens);
+
+// Precondition: every defect passed defect_problems() (the scene loader ensures it).
+// Defect-free: no Boolean runs. Defects whose clearance from the glass boundary and from every
+// other defect exceeds both tessellations' chord errors are appended as reversed shells: that is
+// the exact Boolean result, computed without corefinement. The rest are subtracted with CGAL in
+// groups of non-overlapping tools. Particles are appended as their own outward components.
+Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& options,
+                  StageReport* report = nullptr);
+
+}  // namespace ltm
