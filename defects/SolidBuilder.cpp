@@ -6,6 +6,7 @@
 
 #include "defects/DefectSolid.h"
 #include "geometry/Boolean.h"
+#include "geometry/Refine.h"
 #include "geometry/Tessellate.h"
 
 namespace ltm {
@@ -62,11 +63,24 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
     }
 
     StageTimer t_tools(report, "defect-tools");
+    const double eps_obj = s.object_chord_error;
     std::vector<DefectSolid> tools;
+    std::vector<double> host_tol(defects.size(), eps_obj);  // object chord error near each defect
     size_t tool_triangles = 0;
     for (size_t k = 0; k < defects.size(); ++k) {
-        const double tol = defect_tolerance(defects[k], opt.chord_tolerance, opt.defect_relative_tolerance);
-        tools.push_back(make_defect_solid(lens, defects[k], static_cast<int>(k), tol, s.surfaces));
+        const Defect& d = defects[k];
+        double tol = defect_tolerance(d, opt.chord_tolerance, opt.defect_relative_tolerance);
+        if (d.type != DefectType::Scratch && !d.surface_breaking) {
+            // An enclosed defect close to the boundary: both its tool and the object mesh near it
+            // must be finer than a quarter of its clearance, so that the two inscribed meshes stay
+            // at least half the clearance apart (each moves by at most its chord error).
+            const double clearance = ellipsoid_clearance(lens, d.center, d.frame, d.semi_axes);
+            if (clearance > 0 && clearance <= 2.0 * (eps_obj + tol)) {
+                tol = std::min(tol, 0.25 * clearance);
+                host_tol[k] = 0.25 * clearance;
+            }
+        }
+        tools.push_back(make_defect_solid(lens, d, static_cast<int>(k), tol, s.surfaces));
         s.max_defect_chord_error = std::max(s.max_defect_chord_error, tools.back().chord_error);
         tool_triangles += tools.back().tool.num_triangles();
     }
@@ -82,14 +96,19 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
             if (tools[i].bounds.overlaps(tools[j].bounds, margin)) touches_other[i] = touches_other[j] = true;
         }
     std::vector<size_t> cutters;
+    std::vector<RefineRegion> regions;
     TriMesh appended;
     for (size_t k = 0; k < defects.size(); ++k) {
-        const bool clear = tools[k].clearance > s.object_chord_error + tools[k].chord_error && !touches_other[k];
+        const bool clear = tools[k].clearance > host_tol[k] + tools[k].chord_error && !touches_other[k];
+        Aabb near = tools[k].bounds;
+        const double reach = std::max(0.0, tools[k].clearance) + 2.0 * eps_obj;
+        near.lo -= Vec3{reach, reach, reach};
+        near.hi += Vec3{reach, reach, reach};
         if (defects[k].type == DefectType::Particle) {
             if (!clear)
                 throw std::invalid_argument(fmt::format(
-                    "defects[{}]: the particle is within the tessellation's chord error of the glass boundary or "
-                    "another defect (clearance {:.3g} mm); move it or lower mesh.chord_tolerance",
+                    "defects[{}]: the particle touches another defect or lies within the tessellation's chord "
+                    "error of the glass boundary (clearance {:.3g} mm); particles must be separate from everything",
                     k, tools[k].clearance));
             appended.append(tools[k].tool, /*flip=*/false);
         } else if (clear && !opt.always_boolean) {
@@ -97,7 +116,16 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
             ++s.enclosed_defects;
         } else {
             cutters.push_back(k);
+            host_tol[k] = std::min(host_tol[k], tools[k].chord_error);
         }
+        if (host_tol[k] < eps_obj) regions.push_back({near, host_tol[k]});
+    }
+    if (!regions.empty()) {
+        StageTimer t_ref(report, "refine");
+        const size_t before = lt.mesh.num_triangles();
+        const size_t splits = refine_near(lt.mesh, s.surfaces, regions);
+        t_ref.done(fmt::format("{} region(s), {} bisections, {} -> {} triangles", regions.size(), splits, before,
+                               lt.mesh.num_triangles()));
     }
 
     TriMesh body = std::move(lt.mesh);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 
@@ -181,50 +182,55 @@ struct Icosphere {
     double deviation = 0;  // unit-sphere chord error, exact
 };
 
+Icosphere subdivide(const Icosphere& s) {
+    Icosphere next;
+    next.v = s.v;
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+    auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+        const auto key = std::minmax(a, b);
+        auto it = mid.find(key);
+        if (it != mid.end()) return it->second;
+        next.v.push_back(normalize(s.v[a] + s.v[b]));
+        const auto id = static_cast<std::uint32_t>(next.v.size() - 1);
+        mid.emplace(key, id);
+        return id;
+    };
+    for (const auto& t : s.f) {
+        const auto ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
+        next.f.push_back({t[0], ab, ca});
+        next.f.push_back({t[1], bc, ab});
+        next.f.push_back({t[2], ca, bc});
+        next.f.push_back({ab, bc, ca});
+    }
+    return next;
+}
+
+// Unit icospheres by level (20 4^level faces), built on first use and kept; the chord error of
+// each is measured exactly (1 - the smallest distance of a face from the centre).
 const Icosphere& icosphere(int level) {
-    static std::vector<Icosphere> cache;
-    static std::once_flag once;
-    std::call_once(once, [] {
-        Icosphere s;
+    static std::mutex mutex;
+    static std::vector<std::unique_ptr<Icosphere>> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    if (cache.empty()) {
+        auto s = std::make_unique<Icosphere>();
         const double p = (1.0 + std::sqrt(5.0)) / 2.0;
-        s.v = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-               {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-        for (auto& x : s.v) x = normalize(x);
-        s.f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-               {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-               {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-        for (int level = 0; level <= 8; ++level) {
-            double dev = 0;
-            for (const auto& t : s.f) {
-                const Vec3 c = closest_point_on_triangle({0, 0, 0}, s.v[t[0]], s.v[t[1]], s.v[t[2]]);
-                dev = std::max(dev, 1.0 - length(c));
-            }
-            s.deviation = dev;
-            cache.push_back(s);
-            if (level == 8) break;
-            Icosphere next;
-            next.v = s.v;
-            std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
-            auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
-                const auto key = std::minmax(a, b);
-                auto it = mid.find(key);
-                if (it != mid.end()) return it->second;
-                next.v.push_back(normalize(s.v[a] + s.v[b]));
-                const auto id = static_cast<std::uint32_t>(next.v.size() - 1);
-                mid.emplace(key, id);
-                return id;
-            };
-            for (const auto& t : s.f) {
-                const auto ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
-                next.f.push_back({t[0], ab, ca});
-                next.f.push_back({t[1], bc, ab});
-                next.f.push_back({t[2], ca, bc});
-                next.f.push_back({ab, bc, ca});
-            }
-            s = std::move(next);
-        }
-    });
-    return cache.at(static_cast<size_t>(level));
+        s->v = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
+                {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
+        for (auto& x : s->v) x = normalize(x);
+        s->f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+        cache.push_back(std::move(s));
+    }
+    while (static_cast<int>(cache.size()) <= level) cache.push_back(std::make_unique<Icosphere>(subdivide(*cache.back())));
+    Icosphere& s = *cache[static_cast<size_t>(level)];
+    if (s.deviation == 0) {
+        double dev = 0;
+        for (const auto& t : s.f)
+            dev = std::max(dev, 1.0 - length(closest_point_on_triangle({0, 0, 0}, s.v[t[0]], s.v[t[1]], s.v[t[2]])));
+        s.deviation = dev;
+    }
+    return s;
 }
 
 }  // namespace
@@ -234,6 +240,10 @@ EllipsoidTessellation tessellate_ellipsoid(const Vec3& centre, const Mat3& frame
     const double emax = std::max({e.x, e.y, e.z});
     int level = 0;
     while (level < 8 && icosphere(level).deviation * emax > tol) ++level;
+    if (icosphere(level).deviation * emax > tol)
+        throw std::invalid_argument("an ellipsoid of semi-axis " + std::to_string(emax) +
+                                    " mm needs more than 1.3 million triangles for chord tolerance " +
+                                    std::to_string(tol) + " mm: raise mesh.chord_tolerance");
     const Icosphere& s = icosphere(level);
     EllipsoidTessellation out;
     out.level = level;
@@ -264,8 +274,9 @@ TriMesh sweep_profile(const std::vector<Point2>& profile, int stations,
     const std::uint32_t c0 = m.add_vertex(place(0, c));
     const std::uint32_t c1 = m.add_vertex(place(stations - 1, c));
     for (std::uint32_t i = 0; i < k; ++i) {
-        m.add_triangle(c0, id(0, i + 1), id(0, i), tag_start);
-        m.add_triangle(c1, id(stations - 1, i), id(stations - 1, i + 1), tag_end);
+        // Wound against the side faces' use of the same boundary edges.
+        m.add_triangle(c0, id(0, i), id(0, i + 1), tag_start);
+        m.add_triangle(c1, id(stations - 1, i + 1), id(stations - 1, i), tag_end);
     }
     if (m.signed_volume() < 0)
         for (auto& t : m.triangles) std::swap(t[1], t[2]);

@@ -1,0 +1,20 @@
+#pragma once
+// Subcommands of the ltmsim executable. Each registers itself on the CLI11 app; the one that
+// runs stores its exit status: 0 success, 2 bad input (nothing written), 1 internal error.
+#include <CLI/CLI.hpp>
+#include <string>
+
+namespace ltm::app {
+
+inline constexpr const char* kVersion = "0.1.0";
+
+void add_mesh_command(CLI::App& app);
+
+int exit_status();
+void set_exit_status(int status);
+
+// Writes `text` to `path` atomically (temporary file in the same folder, then rename); throws
+// std::runtime_error naming the path on failure, leaving nothing behind.
+void write_text_atomically(const std::string& path, const std::string& text);
+
+}  // namespace ltm::app

@@ -1,0 +1,47 @@
+#pragma once
+// The whole scene as parsed from a YAML file (docs/scene-format.md): the object, its defects,
+// the telecentric camera, the programmable display, meshing options and the seed.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "defects/Defect.h"
+#include "defects/SolidBuilder.h"
+#include "geometry/Lens.h"
+
+namespace ltm {
+
+enum class ObjectType { Lens, Window };
+enum class RimFinish { Polished, Absorbing };
+
+struct ObjectDesc {
+    ObjectType type = ObjectType::Lens;
+    LensSpec lens;                   // a window is a lens with r1 = r2 = inf
+    RimFinish rim = RimFinish::Polished;
+};
+
+struct CameraDesc {
+    std::array<int, 2> resolution{100, 100};   // [columns N, rows M]
+    std::array<double, 2> size{25.0, 25.0};    // [width, height], mm
+    double numerical_aperture = 0.01;
+    int samples_per_pixel = 64;
+};
+
+struct DisplayDesc {
+    std::array<int, 2> resolution{500, 500};   // [columns Q, rows P]
+    std::array<double, 2> size{100.0, 100.0};  // [width, height], mm
+    double z = 60.0;                           // mm
+};
+
+struct Scene {
+    std::string source;                        // the file it was read from
+    ObjectDesc object;
+    std::vector<Defect> defects;
+    CameraDesc camera;
+    DisplayDesc display;
+    MeshOptions mesh;
+    std::uint64_t seed = 1;
+};
+
+}  // namespace ltm
