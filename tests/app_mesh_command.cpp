@@ -1,0 +1,158 @@
+// The `ltmsim mesh` command's contract (docs/conventions.md, "Command line"): formats, the stage
+// report, exit status 2 with a file:line:key message for bad input, and never a partial file.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <set>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "geometry/MeshExport.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Outcome {
+    int status = -1;
+    std::string err;
+};
+
+// Runs ltmsim with `args`, capturing stderr.
+Outcome ltmsim(const std::string& args, const fs::path& dir) {
+    const fs::path err = dir / "stderr.txt";
+    const std::string cmd = std::string(LTMSIM_EXE) + " " + args + " 2> " + err.string() + " > /dev/null";
+    Outcome r;
+    const int raw = std::system(cmd.c_str());
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    std::ifstream in(err);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    r.err = ss.str();
+    return r;
+}
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+class MeshCommand : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir = fs::temp_directory_path() / ("ltmsim-app-" + std::to_string(::getpid()) + "-" +
+                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+    std::string scene(const std::string& rel) { return std::string(LTM_SOURCE_DIR) + "/scenes/" + rel; }
+    fs::path write(const std::string& name, const std::string& text) {
+        std::ofstream(dir / name) << text;
+        return dir / name;
+    }
+    // Everything in dir except the files the test made itself.
+    std::vector<std::string> outputs() {
+        std::vector<std::string> names;
+        for (const auto& e : fs::directory_iterator(dir)) {
+            const auto n = e.path().filename().string();
+            if (n != "stderr.txt" && n.find(".yaml") == std::string::npos && n != "keep.ply") names.push_back(n);
+        }
+        return names;
+    }
+    fs::path dir;
+};
+
+}  // namespace
+
+TEST_F(MeshCommand, WritesEveryFormatAndReportsStages) {
+    for (const char* ext : {"ply", "obj", "off"}) {
+        const fs::path out = dir / (std::string("pit.") + ext);
+        const Outcome r = ltmsim("mesh " + scene("examples/pit.yaml") + " -o " + out.string() + " --verbose", dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+        EXPECT_TRUE(fs::exists(out));
+        // The pit breaks the surface: it must go through a Boolean, and --verbose says so.
+        EXPECT_NE(r.err.find("boolean"), std::string::npos) << r.err;
+        EXPECT_NE(r.err.find("tessellate"), std::string::npos);
+        const ltm::MeshFileSummary s = ltm::read_mesh_summary(out.string());
+        EXPECT_GT(s.faces, 20000u);
+    }
+}
+
+TEST_F(MeshCommand, DefectFreeSceneRunsNoBoolean) {
+    const fs::path stats = dir / "stats.json";
+    const Outcome r = ltmsim("mesh " + scene("examples/plano-convex.yaml") + " -o " + (dir / "m.ply").string() +
+                             " --stats " + stats.string() + " --verbose",
+                         dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string json = slurp(stats);
+    EXPECT_NE(json.find("\"stage\": \"tessellate\""), std::string::npos) << json;
+    EXPECT_EQ(json.find("\"stage\": \"boolean\""), std::string::npos) << json;
+    EXPECT_NE(json.find("\"boolean_operations\": 0"), std::string::npos) << json;
+    EXPECT_NE(r.err.find("no Boolean ran"), std::string::npos) << r.err;
+}
+
+TEST_F(MeshCommand, PlyCarriesTagsAndLegend) {
+    const fs::path out = dir / "d.ply";
+    ASSERT_EQ(ltmsim("mesh " + scene("default.yaml") + " -o " + out.string(), dir).status, 0);
+    const ltm::MeshFileSummary s = ltm::read_mesh_summary(out.string());
+    ASSERT_EQ(s.tags.size(), s.faces);
+    // Tags 0..2 are the lens faces; the default scene's three bubbles are 3..5.
+    std::set<int> tags(s.tags.begin(), s.tags.end());
+    EXPECT_EQ(tags, (std::set<int>{0, 1, 2, 3, 4, 5}));
+    bool legend = false;
+    for (const auto& c : s.comments) legend = legend || c.find("bubble 2") != std::string::npos;
+    EXPECT_TRUE(legend);
+}
+
+TEST_F(MeshCommand, BadSceneExitsTwoAndWritesNothing) {
+    // A typo in a key: file:line:col, the key path and a suggestion; exit 2; no output.
+    const fs::path bad = write("bad.yaml",
+                               "object:\n  type: lens\n  r1: 50\n  r2: -50\n  center_thickness: 6\n  diamter: 25\n"
+                               "  ior: 1.5\n");
+    const Outcome r = ltmsim("mesh " + bad.string() + " -o " + (dir / "m.ply").string(), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(bad.string() + ":6:3: object.diamter: unknown key 'diamter' for a lens (did you mean "
+                                        "'diameter'?)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(outputs().empty());
+}
+
+TEST_F(MeshCommand, ImpossibleGeometryExitsTwo) {
+    const fs::path bad = write("thin.yaml",
+                               "object: {type: lens, r1: 50, r2: -50, center_thickness: 1, diameter: 25, ior: 1.5}\n");
+    const Outcome r = ltmsim("mesh " + bad.string() + " -o " + (dir / "m.ply").string(), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("object.center_thickness: edge thickness"), std::string::npos) << r.err;
+    EXPECT_TRUE(outputs().empty());
+}
+
+TEST_F(MeshCommand, BadOutputPathsExitTwo) {
+    Outcome r = ltmsim("mesh " + scene("default.yaml") + " -o " + (dir / "missing" / "m.ply").string(), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+    r = ltmsim("mesh " + scene("default.yaml") + " -o " + (dir / "m.stl").string(), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(".stl"), std::string::npos) << r.err;
+    r = ltmsim("mesh " + (dir / "nope.yaml").string() + " -o " + (dir / "m.ply").string(), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("cannot read scene file"), std::string::npos) << r.err;
+    r = ltmsim("mesh", dir);  // usage error
+    EXPECT_EQ(r.status, 2);
+    EXPECT_TRUE(outputs().empty());
+}
+
+TEST_F(MeshCommand, FailureLeavesAnExistingFileUntouched) {
+    const fs::path keep = dir / "keep.ply";
+    std::ofstream(keep) << "the user's own file";
+    const fs::path bad = write("bad.yaml", "object: {type: lens}\n");
+    EXPECT_EQ(ltmsim("mesh " + bad.string() + " -o " + keep.string(), dir).status, 2);
+    EXPECT_EQ(slurp(keep), "the user's own file");
+}
