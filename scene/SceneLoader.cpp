@@ -298,6 +298,19 @@ private:
     void parse_arc(const Item& it, const std::string& path, Defect& d, Where& where) const;
     void check_defect(const Lens& lens, const Defect& d, const std::string& path, const Where& where,
                       Loc defect_loc) const;
+    // [columns, rows] of positive integers; [width, height] of positive lengths (mm).
+    std::array<int, 2> resolution(const YAML::Node& v, Loc at, const std::string& p) const {
+        const auto xs = number_list(v, at, p, {2}, "positive integers [columns, rows]",
+                                    [&](const YAML::Node& x, Loc l, const std::string& q) {
+                                        return static_cast<double>(positive_int(x, l, q));
+                                    });
+        return {static_cast<int>(xs[0]), static_cast<int>(xs[1])};
+    }
+    std::array<double, 2> size2(const YAML::Node& v, Loc at, const std::string& p) const {
+        const auto xs = number_list(v, at, p, {2}, "positive lengths [width, height]",
+                                    [&](const YAML::Node& x, Loc l, const std::string& q) { return positive_length(x, l, q); });
+        return {xs[0], xs[1]};
+    }
     void parse_camera(const Item& it, CameraDesc& camera) const;
     void parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, bool& z_given) const;
     void parse_mesh(const Item& it, MeshOptions& mesh) const;
@@ -732,16 +745,9 @@ void Parser::parse_camera(const Item& it, CameraDesc& camera) const {
         const std::string p = join_path(path, e.key);
         const Loc at = e.value_loc();
         if (e.key == "resolution") {
-            const auto xs = number_list(e.value, at, p, {2}, "positive integers [columns, rows]",
-                                        [&](const YAML::Node& v, Loc l, const std::string& q) {
-                                            return static_cast<double>(positive_int(v, l, q));
-                                        });
-            camera.resolution = {static_cast<int>(xs[0]), static_cast<int>(xs[1])};
+            camera.resolution = resolution(e.value, at, p);
         } else if (e.key == "size") {
-            const auto xs = number_list(
-                e.value, at, p, {2}, "positive lengths [width, height]",
-                [&](const YAML::Node& v, Loc l, const std::string& q) { return positive_length(v, l, q); });
-            camera.size = {xs[0], xs[1]};
+            camera.size = size2(e.value, at, p);
         } else if (e.key == "numerical_aperture") {
             const double na = number(e.value, at, p);
             if (!(na > 0 && na < 1)) fail(at, p, fmt::format("must be in (0, 1), got {}", e.value.Scalar()));
@@ -763,16 +769,9 @@ void Parser::parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, boo
         const std::string p = join_path(path, e.key);
         const Loc at = e.value_loc();
         if (e.key == "resolution") {
-            const auto xs = number_list(e.value, at, p, {2}, "positive integers [columns, rows]",
-                                        [&](const YAML::Node& v, Loc l, const std::string& q) {
-                                            return static_cast<double>(positive_int(v, l, q));
-                                        });
-            display.resolution = {static_cast<int>(xs[0]), static_cast<int>(xs[1])};
+            display.resolution = resolution(e.value, at, p);
         } else if (e.key == "size") {
-            const auto xs = number_list(
-                e.value, at, p, {2}, "positive lengths [width, height]",
-                [&](const YAML::Node& v, Loc l, const std::string& q) { return positive_length(v, l, q); });
-            display.size = {xs[0], xs[1]};
+            display.size = size2(e.value, at, p);
         } else if (e.key == "z") {
             display.z = number(e.value, at, p);
             z_loc = at;
