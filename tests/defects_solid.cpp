@@ -4,6 +4,7 @@
 // bound. Expected volumes come from closed forms or independent quadrature, derived below.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -426,3 +427,89 @@ TEST(Placement, ProblemsAreReported) {
     e.semi_axes = {0.1, 0.1, 3.1};
     EXPECT_EQ(key(e), "center");
 }
+
+namespace {
+
+// The eight object kinds of tests/geometry_lens.cpp, each with every defect kind.
+const std::vector<std::pair<const char*, LensSpec>>& all_kinds() {
+    static const std::vector<std::pair<const char*, LensSpec>> k = {
+        {"double-convex", {50, -50, 6, 25, 1.5168}},     {"plano-convex", {40, INFINITY, 5, 25, 1.5168}},
+        {"convex-plano", {INFINITY, -40, 5, 25, 1.5168}}, {"positive-meniscus", {30, 60, 5, 25, 1.5168}},
+        {"negative-meniscus", {60, 30, 4, 25, 1.5168}},   {"plano-concave", {INFINITY, 40, 2, 25, 1.5168}},
+        {"biconcave", {-40, 40, 2, 25, 1.5168}},          {"window", {INFINITY, INFINITY, 3, 25, 1.5168}},
+    };
+    return k;
+}
+
+// Volume a ball (centre c, radius r) removes from the glass near one face: for a flat face the
+// cap on the glass side; for a sphere S the part inside S (glass inside S) or outside S.
+double removed_by_ball(const Lens& lens, int side, const Vec3& c, double r) {
+    const Surface s = side == 0 ? lens.front_surface() : lens.back_surface();
+    const int sign = side == 0 ? lens.front_normal_sign() : lens.back_normal_sign();
+    if (s.kind == SurfaceKind::Plane) {
+        const double depth = -dot(c - s.origin, s.axis * double(sign));  // centre depth into the glass
+        return cap_volume(r, r + depth);
+    }
+    const double inter = lens_of_spheres(s.radius, r, distance(c, s.origin));
+    return sign > 0 ? inter : sphere_volume(r) - inter;
+}
+
+// Volume of a groove along `d` (its path as scratch_path would follow it) on any face.
+double removed_by_groove(const Lens& lens, const Defect& d) {
+    const double R = d.side == 0 ? lens.spec().r1 : lens.spec().r2;
+    const int sign = d.side == 0 ? lens.front_normal_sign() : lens.back_normal_sign();
+    const double A = profile_area(d.width, d.depth, d.profile);
+    if (std::isinf(R)) {
+        if (!d.arc) return A * std::hypot(d.end.x - d.start.x, d.end.y - d.start.y);
+        return (d.end_angle - d.start_angle) * kPi / 180 * d.arc_radius * A;
+    }
+    const Vec3 C = (d.side == 0 ? lens.front_surface() : lens.back_surface()).origin;
+    if (!d.arc) {
+        const Vec3 a = lens.surface_point(d.side, d.start.x, d.start.y), b = lens.surface_point(d.side, d.end.x, d.end.y);
+        const double dphi = std::acos(std::clamp(dot(normalize(a - C), normalize(b - C)), -1.0, 1.0));
+        return groove_on_sphere(std::fabs(R), sign, kPi / 2, dphi, d.width, d.depth, d.profile);
+    }
+    const double alpha = 2 * std::asin(d.arc_radius / (2 * std::fabs(R)));
+    return groove_on_sphere(std::fabs(R), sign, alpha, (d.end_angle - d.start_angle) * kPi / 180, d.width, d.depth,
+                            d.profile);
+}
+
+}  // namespace
+
+class EveryKind : public ::testing::TestWithParam<int> {};
+
+TEST_P(EveryKind, EveryDefectKindHasItsAnalyticVolume) {
+    const auto& [name, spec] = all_kinds()[GetParam()];
+    SCOPED_TRACE(name);
+    const Lens lens(spec);
+    const double V = lens.volume();
+    // Enclosed sphere and rotated ellipsoid at mid-thickness.
+    const double zmid = 0.5 * (lens.z_front(3) + lens.z_back(3));
+    expect_volume(build(spec, {bubble({3, 0, zmid}, 0.15)}), spec, V - sphere_volume(0.15));
+    Defect e = bubble({-2, 1, 0.5 * (lens.z_front(2.3) + lens.z_back(2.3))}, 0.1);
+    e.semi_axes = {0.25, 0.12, 0.08};
+    e.frame = rotation_from_euler_deg({10, 60, -30});
+    expect_volume(build(spec, {e}), spec, V - sphere_volume(1) * 0.25 * 0.12 * 0.08);
+    // A pit through the front face at (2, -1): centre 0.05 mm outside the glass along the normal.
+    const Vec3 n = lens.surface_outward_normal(0, 2, -1);
+    const Vec3 pc = lens.surface_point(0, 2, -1) + n * 0.05;
+    expect_volume(build(spec, {bubble(pc, 0.2, true)}), spec, V - removed_by_ball(lens, 0, pc, 0.2));
+    // A straight V scratch on the front and an arc U scratch on the back.
+    const Defect v = scratch(0, {-4, -2, 0}, {3, 4, 0}, 0.05, 0.02, ScratchProfile::V);
+    expect_volume(build(spec, {v}), spec, V - removed_by_groove(lens, v));
+    const Defect u = arc_scratch(1, {1, 0.5, 0}, 4, 30, 200, 0.04, 0.03, ScratchProfile::U);
+    expect_volume(build(spec, {u}), spec, V - removed_by_groove(lens, u));
+    // An absorbing particle: glass unchanged, particle its own closed component.
+    Defect p = bubble({0, 2, 0.5 * (lens.z_front(2) + lens.z_back(2))}, 0.1);
+    p.type = DefectType::Particle;
+    const Outcome o = build(spec, {p});
+    expect_volume(o, spec, V);
+    EXPECT_EQ(o.glass.components, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Lenses, EveryKind, ::testing::Range(0, 8),
+                         [](const auto& info) {
+                             std::string s = all_kinds()[info.param].first;
+                             std::replace(s.begin(), s.end(), '-', '_');
+                             return s;
+                         });
