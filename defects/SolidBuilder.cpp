@@ -59,6 +59,7 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
                             lt.chord_error));
     if (defects.empty()) {
         s.mesh = std::move(lt.mesh);
+        s.tag_chord_error.assign(s.surfaces.size(), s.object_chord_error);
         return s;
     }
 
@@ -85,6 +86,10 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
         tool_triangles += tools.back().tool.num_triangles();
     }
     t_tools.done(fmt::format("{} defects, {} tool triangles", defects.size(), tool_triangles));
+    s.tag_chord_error.assign(s.surfaces.size(), s.object_chord_error);
+    for (const auto& t : tools)
+        for (int tag : t.tags) s.tag_chord_error[static_cast<size_t>(tag)] = t.chord_error;
+    s.corefined.assign(defects.size(), false);
 
     // A defect is enclosed when it stays clear of the glass boundary and of every other defect by
     // more than both tessellations' chord errors: its inscribed tool mesh then cannot touch the
@@ -116,6 +121,7 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
             ++s.enclosed_defects;
         } else {
             cutters.push_back(k);
+            s.corefined[k] = true;
             host_tol[k] = std::min(host_tol[k], tools[k].chord_error);
         }
         if (host_tol[k] < eps_obj) regions.push_back({near, host_tol[k]});

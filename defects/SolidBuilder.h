@@ -24,6 +24,8 @@ struct Solid {
     double max_defect_chord_error = 0;
     int boolean_operations = 0;
     int enclosed_defects = 0;  // appended as reversed shells without a Boolean
+    std::vector<bool> corefined;           // per defect: went through the Boolean (it cuts the glass)
+    std::vector<double> tag_chord_error;   // per surface-table entry: bound on its faces' chord error, mm
 };
 
 // Tags 0, 1, 2 are always the front, back and rim.

@@ -19,6 +19,7 @@ struct ObjectDesc {
     ObjectType type = ObjectType::Lens;
     LensSpec lens;                   // a window is a lens with r1 = r2 = inf
     RimFinish rim = RimFinish::Polished;
+    double absorption = 0.0;         // Beer-Lambert attenuation coefficient of the glass, 1/mm
 };
 
 struct CameraDesc {
@@ -26,6 +27,7 @@ struct CameraDesc {
     std::array<double, 2> size{25.0, 25.0};    // [width, height], mm
     double numerical_aperture = 0.01;
     int samples_per_pixel = 64;
+    double focus_z = 0.0;                      // mm, the plane the pixel footprints are defined on
 };
 
 struct DisplayDesc {

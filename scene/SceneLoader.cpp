@@ -483,8 +483,8 @@ Vec3 Parser::point23(const Item& it, const std::string& path, bool& has_z) const
 // ---------------------------------------------------------------------------------------------
 // The object
 
-const std::vector<std::string> kLensKeys{"type", "r1", "r2", "center_thickness", "diameter", "ior", "rim"};
-const std::vector<std::string> kWindowKeys{"type", "thickness", "diameter", "ior", "rim"};
+const std::vector<std::string> kLensKeys{"type", "r1", "r2", "center_thickness", "diameter", "ior", "rim", "absorption"};
+const std::vector<std::string> kWindowKeys{"type", "thickness", "diameter", "ior", "rim", "absorption"};
 
 void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) const {
     const std::string path = "object";
@@ -525,6 +525,10 @@ void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) cons
         } else if (e.key == "rim") {
             object.rim = choice(e.value, at, p, {"polished", "absorbing"}) == 0 ? RimFinish::Polished
                                                                                 : RimFinish::Absorbing;
+        } else if (e.key == "absorption") {
+            const double a = number(e.value, at, p);
+            if (!(a >= 0)) fail(at, p, fmt::format("must be >= 0 (1/mm), got {}", e.value.Scalar()));
+            object.absorption = a;
         }
     });
     if (window) {
@@ -740,7 +744,7 @@ void Parser::parse_camera(const Item& it, CameraDesc& camera) const {
     const std::string path = "camera";
     require_map(it, path);
     KeyRule rule;
-    rule.keys = {"resolution", "size", "numerical_aperture", "samples_per_pixel"};
+    rule.keys = {"resolution", "size", "numerical_aperture", "samples_per_pixel", "focus_z"};
     walk(it.value, path, rule, [&](const Item& e) {
         const std::string p = join_path(path, e.key);
         const Loc at = e.value_loc();
@@ -754,6 +758,8 @@ void Parser::parse_camera(const Item& it, CameraDesc& camera) const {
             camera.numerical_aperture = na;
         } else if (e.key == "samples_per_pixel") {
             camera.samples_per_pixel = positive_int(e.value, at, p);
+        } else if (e.key == "focus_z") {
+            camera.focus_z = number(e.value, at, p);
         }
     });
 }

@@ -1,0 +1,197 @@
+#include "trace/EmbreeScene.h"
+
+#include <embree3/rtcore.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace ltm {
+
+namespace {
+
+// An intersect context extended with the double-precision ray and the skip list; Embree passes
+// the context pointer through to our callbacks (the pattern of Embree's own tutorials).
+struct QueryContext {
+    RTCIntersectContext ctx;
+    Vec3 o, d;
+    double tmin = 0, best_t = INFINITY;
+    std::uint32_t best_prim = 0;
+    const std::uint32_t* skip = nullptr;
+    int skip_count = 0;
+    double skip_until = 0;
+};
+
+void skip_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* q = reinterpret_cast<const QueryContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i]) continue;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        const float t = RTCRayN_tfar(args->ray, args->N, i);
+        for (int k = 0; k < q->skip_count; ++k)
+            if (prim == q->skip[k] && t < q->skip_until) args->valid[i] = 0;
+    }
+}
+
+void patch_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* patches = static_cast<const std::vector<Patch>*>(args->geometryUserPtr);
+    const Aabb& b = (*patches)[args->primID].bounds;
+    // Rounded outward to float so the box still contains the double surface.
+    args->bounds_o->lower_x = std::nextafter(static_cast<float>(b.lo.x), -INFINITY);
+    args->bounds_o->lower_y = std::nextafter(static_cast<float>(b.lo.y), -INFINITY);
+    args->bounds_o->lower_z = std::nextafter(static_cast<float>(b.lo.z), -INFINITY);
+    args->bounds_o->upper_x = std::nextafter(static_cast<float>(b.hi.x), INFINITY);
+    args->bounds_o->upper_y = std::nextafter(static_cast<float>(b.hi.y), INFINITY);
+    args->bounds_o->upper_z = std::nextafter(static_cast<float>(b.hi.z), INFINITY);
+}
+
+void patch_intersect(const RTCIntersectFunctionNArguments* args) {
+    if (!args->valid[0]) return;
+    auto* q = reinterpret_cast<QueryContext*>(args->context);
+    const auto* patches = static_cast<const std::vector<Patch>*>(args->geometryUserPtr);
+    auto* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);  // N == 1 under rtcIntersect1
+    // A triangle found first has shortened tfar; a root must beat it as well as our own best.
+    const double t = patch_hit((*patches)[args->primID], q->o, q->d, q->tmin,
+                               std::min(q->best_t, static_cast<double>(rh->ray.tfar)));
+    if (!(t < q->best_t)) return;
+    q->best_t = t;
+    q->best_prim = args->primID;
+    // tfar culls farther primitives: round up so a primitive with a slightly nearer double root
+    // is never culled.
+    rh->ray.tfar = std::nextafter(static_cast<float>(t), INFINITY);
+    rh->hit.geomID = args->geomID;
+    rh->hit.primID = args->primID;
+    rh->hit.u = rh->hit.v = 0;
+    rh->hit.Ng_x = rh->hit.Ng_y = 0;
+    rh->hit.Ng_z = 1;
+}
+
+void throw_on_error(RTCDevice device, const char* what) {
+    const RTCError e = rtcGetDeviceError(device);
+    if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("Embree error during ") + what + ": " + std::to_string(e));
+}
+
+}  // namespace
+
+struct EmbreeScene::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    unsigned tri_geom = RTC_INVALID_GEOMETRY_ID, patch_geom = RTC_INVALID_GEOMETRY_ID;
+    const TriMesh* triangles = nullptr;
+    const std::vector<Patch>* patches = nullptr;
+};
+
+EmbreeScene::EmbreeScene(const TriMesh* triangles, const std::vector<Patch>* patches, bool robust)
+    : impl_(std::make_unique<Impl>()) {
+    Impl& m = *impl_;
+    m.triangles = triangles;
+    m.patches = patches;
+    m.device = rtcNewDevice("verbose=0");
+    if (!m.device) throw std::runtime_error("Embree: cannot create a device");
+    m.scene = rtcNewScene(m.device);
+    rtcSetSceneFlags(m.scene, static_cast<RTCSceneFlags>((robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE) |
+                                                         RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
+    rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_HIGH);
+    if (triangles && triangles->num_triangles() > 0) {
+        RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                              3 * sizeof(float), triangles->num_vertices()));
+        for (size_t i = 0; i < triangles->num_vertices(); ++i) {
+            v[3 * i] = static_cast<float>(triangles->vertices[i].x);
+            v[3 * i + 1] = static_cast<float>(triangles->vertices[i].y);
+            v[3 * i + 2] = static_cast<float>(triangles->vertices[i].z);
+        }
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                   3 * sizeof(unsigned), triangles->num_triangles()));
+        for (size_t f = 0; f < triangles->num_triangles(); ++f)
+            for (int k = 0; k < 3; ++k) idx[3 * f + k] = triangles->triangles[f][k];
+        rtcCommitGeometry(g);
+        m.tri_geom = rtcAttachGeometry(m.scene, g);
+        rtcReleaseGeometry(g);
+    }
+    if (patches && !patches->empty()) {
+        RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(patches->size()));
+        rtcSetGeometryUserData(g, const_cast<std::vector<Patch>*>(patches));
+        rtcSetGeometryBoundsFunction(g, patch_bounds, nullptr);
+        rtcSetGeometryIntersectFunction(g, patch_intersect);
+        rtcCommitGeometry(g);
+        m.patch_geom = rtcAttachGeometry(m.scene, g);
+        rtcReleaseGeometry(g);
+    }
+    rtcCommitScene(m.scene);
+    throw_on_error(m.device, "scene build");
+}
+
+EmbreeScene::~EmbreeScene() {
+    if (impl_->scene) rtcReleaseScene(impl_->scene);
+    if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, const std::uint32_t* skip,
+                                 int skip_count, double skip_until) const {
+    QueryContext q;
+    rtcInitIntersectContext(&q.ctx);
+    if (skip_count > 0) q.ctx.filter = skip_filter;
+    q.o = o;
+    q.d = d;
+    q.tmin = tmin;
+    q.best_t = tmax;
+    q.skip = skip;
+    q.skip_count = skip_count;
+    q.skip_until = skip_until;
+    RTCRayHit rh;
+    rh.ray.org_x = static_cast<float>(o.x);
+    rh.ray.org_y = static_cast<float>(o.y);
+    rh.ray.org_z = static_cast<float>(o.z);
+    rh.ray.dir_x = static_cast<float>(d.x);
+    rh.ray.dir_y = static_cast<float>(d.y);
+    rh.ray.dir_z = static_cast<float>(d.z);
+    // Float bounds rounded outward: the double interval is what counts for user geometry.
+    rh.ray.tnear = tmin > 0 ? std::nextafter(static_cast<float>(tmin), 0.0f) : 0.0f;
+    rh.ray.tfar = std::isinf(tmax) ? std::numeric_limits<float>::infinity()
+                                   : std::nextafter(static_cast<float>(tmax), INFINITY);
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &q.ctx, &rh);
+    Candidate c;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return c;
+    c.hit = true;
+    if (rh.hit.geomID == impl_->patch_geom) {
+        c.analytic = true;
+        c.t = q.best_t;
+        c.prim = q.best_prim;
+        c.tag = (*impl_->patches)[c.prim].tag;
+    } else {
+        c.t = rh.ray.tfar;
+        c.prim = rh.hit.primID;
+        c.tag = impl_->triangles->tags[c.prim];
+    }
+    return c;
+}
+
+long EmbreeScene::raw_intersect(const Vec3& o, const Vec3& d, float tmin) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTCRayHit rh;
+    rh.ray.org_x = static_cast<float>(o.x);
+    rh.ray.org_y = static_cast<float>(o.y);
+    rh.ray.org_z = static_cast<float>(o.z);
+    rh.ray.dir_x = static_cast<float>(d.x);
+    rh.ray.dir_y = static_cast<float>(d.y);
+    rh.ray.dir_z = static_cast<float>(d.z);
+    rh.ray.tnear = tmin;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &ctx, &rh);
+    return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : static_cast<long>(rh.hit.primID);
+}
+
+}  // namespace ltm

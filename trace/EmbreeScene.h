@@ -1,0 +1,44 @@
+#pragma once
+// The one small interface to Embree 3 (Debian ships Embree 3 only; its API differs from Embree
+// 4's, so nothing else includes <embree3/rtcore.h>). Holds a scene of triangles (a tagged mesh)
+// and/or analytic patches (user geometry intersected exactly in double precision).
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "geometry/TriMesh.h"
+#include "trace/Patch.h"
+
+namespace ltm {
+
+struct Candidate {
+    bool hit = false;
+    bool analytic = false;   // a user-geometry patch: `t` is exact (double)
+    double t = INFINITY;     // triangles: Embree's float distance
+    std::uint32_t prim = 0;  // triangle index in the mesh, or patch index
+    int tag = -1;
+};
+
+class EmbreeScene {
+public:
+    // `robust` sets RTC_SCENE_FLAG_ROBUST (watertight traversal, ~10-20 % slower).
+    EmbreeScene(const TriMesh* triangles, const std::vector<Patch>* patches, bool robust);
+    ~EmbreeScene();
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    // First hit with t in (tmin, tmax). The double ray is kept for user geometry; triangles see
+    // its float rounding. Triangles in `skip` (up to 4) are ignored when their t < skip_until.
+    Candidate intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, const std::uint32_t* skip = nullptr,
+                        int skip_count = 0, double skip_until = 0) const;
+
+    // A bare rtcIntersect1 on the same scene (no filter, no refinement): the benchmark baseline.
+    // Returns the hit primitive or -1.
+    long raw_intersect(const Vec3& o, const Vec3& d, float tmin) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ltm

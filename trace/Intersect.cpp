@@ -1,0 +1,133 @@
+#include "trace/Intersect.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ltm {
+
+void Roots::sort() {
+    for (int i = 1; i < count && i < 4; ++i)
+        for (int j = i; j > 0 && t[j - 1] > t[j]; --j) std::swap(t[j - 1], t[j]);
+}
+
+Roots solve_quadratic(double a, double b, double c, double disc) {
+    Roots r;
+    if (!(disc >= 0) || a == 0) {
+        if (a == 0 && b != 0) r.push(-c / b);
+        return r;
+    }
+    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+    const double t0 = q / a;
+    const double t1 = q != 0 ? c / q : t0;
+    r.push(std::min(t0, t1));
+    r.push(std::max(t0, t1));
+    return r;
+}
+
+namespace {
+
+// Sphere |o + t d - c|^2 = r^2 with |d| = 1: t^2 + 2 (oc.d) t + |oc|^2 - r^2 = 0. Its discriminant
+// 4 (r^2 - |oc - (oc.d) d|^2) uses the distance from the centre to the line, which stays accurate
+// when the ray passes near the centre and does not subtract two large squares.
+Roots sphere(const Vec3& c, double r, const Vec3& o, const Vec3& d) {
+    const Vec3 oc = o - c;
+    const double b = dot(oc, d);
+    const Vec3 perp = oc - d * b;
+    const double disc = (r - length(perp)) * (r + length(perp));
+    return solve_quadratic(1.0, 2.0 * b, (length(oc) - r) * (length(oc) + r), 4.0 * disc);
+}
+
+Roots cylinder(const Vec3& c, const Vec3& u, double r, const Vec3& o, const Vec3& d) {
+    // Project onto the plane normal to the axis: |oc_p + t d_p|^2 = r^2.
+    const Vec3 oc = o - c;
+    const Vec3 ocp = oc - u * dot(oc, u), dp = d - u * dot(d, u);
+    const double a = dot(dp, dp);
+    if (a == 0) return {};
+    const double b = dot(ocp, dp);
+    // Distance from the axis to the (projected) line: |ocp - (ocp.dp / a) dp|.
+    const Vec3 perp = ocp - dp * (b / a);
+    const double lp = length(perp), lo = length(ocp);
+    return solve_quadratic(a, 2.0 * b, (lo - r) * (lo + r), 4.0 * a * (r - lp) * (r + lp));
+}
+
+Roots ellipsoid(const Surface& s, const Vec3& o, const Vec3& d) {
+    // In the body frame scaled to the unit sphere: o' = S^-1 R^T (o - c), d' = S^-1 R^T d.
+    const Mat3 rt = s.frame.transposed();
+    const Vec3 ob = rt * (o - s.origin), db = rt * d;
+    const Vec3 os{ob.x / s.semi_axes.x, ob.y / s.semi_axes.y, ob.z / s.semi_axes.z};
+    const Vec3 ds{db.x / s.semi_axes.x, db.y / s.semi_axes.y, db.z / s.semi_axes.z};
+    const double a = dot(ds, ds), b = dot(os, ds);
+    const Vec3 perp = os - ds * (b / a);
+    const double lp = length(perp), lo = length(os);
+    return solve_quadratic(a, 2.0 * b, (lo - 1.0) * (lo + 1.0), 4.0 * a * (1.0 - lp) * (1.0 + lp));
+}
+
+// Double cone with apex A, axis u, half-angle al: (v.u)^2 = cos^2(al) |v|^2 with v = o + t d - A.
+Roots cone(const Surface& s, const Vec3& o, const Vec3& d) {
+    const Vec3 v = o - s.origin;
+    const double c2 = std::cos(s.angle) * std::cos(s.angle);
+    const double du = dot(d, s.axis), vu = dot(v, s.axis);
+    const double a = du * du - c2;
+    const double b = 2.0 * (du * vu - c2 * dot(d, v));
+    const double c = vu * vu - c2 * dot(v, v);
+    return solve_quadratic(a, b, c, b * b - 4.0 * a * c);
+}
+
+Roots torus(const Surface& s, const Vec3& o, const Vec3& d) {
+    Roots r;
+    // Only the part of the ray within the torus's bounding sphere (radius R + r) can hit it.
+    const Roots bs = sphere(s.origin, s.radius + s.minor_radius, o, d);
+    if (bs.count < 2) return r;
+    const double t0 = bs.t[0], t1 = bs.t[1];
+    const double step = 0.25 * s.minor_radius;
+    const int n = std::max(4, static_cast<int>(std::ceil((t1 - t0) / step)));
+    auto f = [&](double t) { return s.signed_distance(o + d * t); };
+    double ta = t0, fa = f(ta);
+    for (int i = 1; i <= n && r.count < 4; ++i) {
+        const double tb = t0 + (t1 - t0) * i / n, fb = f(tb);
+        if ((fa < 0) != (fb < 0)) {
+            double lo = ta, hi = tb, flo = fa;
+            for (int it = 0; it < 200; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                if (mid <= lo || mid >= hi) break;
+                const double fm = f(mid);
+                if ((fm < 0) == (flo < 0)) { lo = mid; flo = fm; } else hi = mid;
+            }
+            r.push(0.5 * (lo + hi));
+        }
+        ta = tb;
+        fa = fb;
+    }
+    return r;
+}
+
+}  // namespace
+
+Roots intersect(const Surface& s, const Vec3& o, const Vec3& d) {
+    Roots r;
+    switch (s.kind) {
+        case SurfaceKind::Plane: {
+            const double dn = dot(d, s.axis);
+            if (dn != 0) r.push(dot(s.origin - o, s.axis) / dn);
+            return r;
+        }
+        case SurfaceKind::Sphere: r = sphere(s.origin, s.radius, o, d); break;
+        case SurfaceKind::Cylinder: r = cylinder(s.origin, s.axis, s.radius, o, d); break;
+        case SurfaceKind::Ellipsoid: r = ellipsoid(s, o, d); break;
+        case SurfaceKind::Cone: r = cone(s, o, d); break;
+        case SurfaceKind::Torus: r = torus(s, o, d); break;
+    }
+    r.sort();
+    return r;
+}
+
+double point_error_bound(const Surface& s, const Vec3& p) {
+    constexpr double u = std::numeric_limits<double>::epsilon() * 0.5;
+    const double mag = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
+                       std::max({std::fabs(s.origin.x), std::fabs(s.origin.y), std::fabs(s.origin.z)}) + s.radius +
+                       s.minor_radius + std::max({s.semi_axes.x, s.semi_axes.y, s.semi_axes.z});
+    return std::fabs(s.signed_distance(p)) + 64.0 * u * mag;
+}
+
+}  // namespace ltm

@@ -1,0 +1,48 @@
+#include "trace/Patch.h"
+
+#include <cmath>
+#include <limits>
+
+#include "trace/Intersect.h"
+
+namespace ltm {
+
+std::vector<Patch> object_patches(const Lens& lens) {
+    const double a = lens.aperture_radius();
+    std::vector<Patch> out(3);
+    const double zf0 = lens.z_front(0), zfa = lens.z_front(a), zb0 = lens.z_back(0), zba = lens.z_back(a);
+    out[0] = {Patch::Kind::Cap, lens.front_surface(), 0, a, zf0, 0, 0, {}};
+    out[1] = {Patch::Kind::Cap, lens.back_surface(), 1, a, zb0, 0, 0, {}};
+    out[2] = {Patch::Kind::Rim, lens.rim_surface(), 2, a, 0, zfa, zba, {}};
+    out[0].bounds = {{-a, -a, std::fmin(zf0, zfa)}, {a, a, std::fmax(zf0, zfa)}};
+    out[1].bounds = {{-a, -a, std::fmin(zb0, zba)}, {a, a, std::fmax(zb0, zba)}};
+    out[2].bounds = {{-a, -a, zfa}, {a, a, zba}};
+    return out;
+}
+
+double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax) {
+    constexpr double slack = 8 * std::numeric_limits<double>::epsilon();
+    const Roots r = intersect(p.surface, o, d);
+    for (int i = 0; i < r.count; ++i) {
+        const double t = r.t[i];
+        if (!(t > tmin && t < tmax)) continue;
+        if (p.kind == Patch::Kind::Closed) return t;
+        const Vec3 x = o + d * t;
+        const double rho = std::hypot(x.x, x.y);
+        if (p.kind == Patch::Kind::Rim) {
+            const double zs = slack * (std::fabs(p.z_lo) + std::fabs(p.z_hi) + p.a);
+            if (x.z >= p.z_lo - zs && x.z <= p.z_hi + zs) return t;
+            continue;
+        }
+        if (rho > p.a * (1 + slack)) continue;
+        if (p.surface.kind == SurfaceKind::Sphere) {
+            // The branch through the vertex: on the vertex's side of the centre's z.
+            const double zc = p.surface.origin.z;
+            if ((x.z - zc) * (p.z_vertex - zc) <= 0) continue;
+        }
+        return t;
+    }
+    return INFINITY;
+}
+
+}  // namespace ltm

@@ -1,0 +1,32 @@
+#pragma once
+// The object's bounding patches as exact analytic primitives: the front and back caps (a sphere
+// or plane restricted to rho <= a and, for a sphere, to the branch through the vertex) and the
+// rim (the cylinder rho = a between the caps' edges). Also the closed ellipsoid defects.
+// Used as Embree user geometry (the analytic representation) and as the tracer's exact guard.
+#include <vector>
+
+#include "geometry/Lens.h"
+#include "geometry/Surface.h"
+#include "geometry/TriMesh.h"
+
+namespace ltm {
+
+struct Patch {
+    enum class Kind { Cap, Rim, Closed } kind = Kind::Closed;
+    Surface surface;
+    int tag = -1;
+    double a = 0;                // aperture radius (caps and rim)
+    double z_vertex = 0;         // caps: the vertex height (selects the sphere's branch)
+    double z_lo = 0, z_hi = 0;   // rim: the caps' edge heights
+    Aabb bounds;
+};
+
+// The front, back and rim patches of a lens, tagged 0, 1, 2 (SolidBuilder's kTagFront...).
+std::vector<Patch> object_patches(const Lens& lens);
+
+// The smallest root t in (tmin, tmax) of the ray o + t d (d unit) on the patch, or +inf.
+// Boundary tests (rho <= a, z in [z_lo, z_hi]) allow a few ulps so that a ray through a seam is
+// caught by at least one of the two patches meeting there.
+double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax);
+
+}  // namespace ltm

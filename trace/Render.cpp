@@ -1,0 +1,168 @@
+#include "trace/Render.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+
+namespace ltm {
+
+namespace {
+
+constexpr long kBlock = 32;  // pixels per block; fixed so block statistics merge in a fixed order
+
+// Prints "rendering: 42% 3.1 Mpaths/s ETA 12 s" on a terminal, every half second.
+class Progress {
+public:
+    Progress(bool enabled, long total_pixels, int spp)
+        : enabled_(enabled && ::isatty(STDERR_FILENO)), total_(total_pixels), spp_(spp) {
+        if (enabled_) thread_ = std::thread([this] { loop(); });
+    }
+    ~Progress() {
+        if (!enabled_) return;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+        }
+        cv_.notify_all();
+        thread_.join();
+        std::fprintf(stderr, "\r%60s\r", "");
+    }
+    void add(long pixels) { done_ += pixels; }
+
+private:
+    void loop() {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::unique_lock<std::mutex> lock(mutex_);
+        while (!cv_.wait_for(lock, std::chrono::milliseconds(500), [this] { return stop_; })) {
+            const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            const long d = done_.load();
+            const double rate = d * static_cast<double>(spp_) / std::max(s, 1e-9);
+            const double eta = d > 0 ? s * (total_ - d) / d : 0.0;
+            std::fprintf(stderr, "\rrendering: %3.0f%%  %.2f Mpaths/s  ETA %.0f s   ", 100.0 * d / total_, rate / 1e6, eta);
+            std::fflush(stderr);
+        }
+    }
+    bool enabled_;
+    long total_;
+    int spp_;
+    std::atomic<long> done_{0};
+    bool stop_ = false;
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    std::thread thread_;
+};
+
+struct Entry {
+    std::int32_t column;
+    double weight;
+};
+
+}  // namespace
+
+RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Scene& scene = tracer.scene();
+    const TelecentricCamera& cam = tracer.camera();
+    const long K = cam.pixels();
+    const int spp = cam.samples_per_pixel();
+    const long L = tracer.display().pixels();
+    const std::uint64_t seed = scene.seed + opt.seed_offset;
+    const bool pattern = opt.pattern != nullptr;
+    if (pattern && static_cast<long>(opt.pattern->size()) != L)
+        throw std::invalid_argument("the pattern has " + std::to_string(opt.pattern->size()) +
+                                    " values but the display has " + std::to_string(L) + " pixels");
+
+    RenderResult out;
+    std::vector<std::vector<std::pair<std::int32_t, float>>> rows(pattern ? 0 : static_cast<size_t>(K));
+    if (pattern) {
+        out.image.assign(static_cast<size_t>(K), 0.0);
+        out.image_stderr.assign(static_cast<size_t>(K), 0.0);
+    }
+    const long blocks = (K + kBlock - 1) / kBlock;
+    std::vector<PathStats> block_stats(static_cast<size_t>(blocks));
+    Progress progress(opt.progress, K, spp);
+
+    auto render_block = [&](long b) {
+        PathStats& stats = block_stats[static_cast<size_t>(b)];
+        std::vector<Entry> entries;
+        entries.reserve(static_cast<size_t>(spp));
+        for (long k = b * kBlock; k < std::min(K, (b + 1) * kBlock); ++k) {
+            const std::vector<int> perm = cam.permutation(k, seed);
+            entries.clear();
+            double sum = 0, sum2 = 0;
+            for (int s = 0; s < spp; ++s) {
+                Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
+                Vec3 o, d;
+                cam.sample(k, s, perm, rng, o, d);
+                const PathResult r = tracer.sample_path(o, d, rng, stats);
+                if (r.pixel < 0) continue;
+                if (pattern) {
+                    const double f = r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
+                    sum += f;
+                    sum2 += f * f;
+                } else {
+                    entries.push_back({static_cast<std::int32_t>(r.pixel), r.weight});
+                }
+            }
+            if (pattern) {
+                const double n = spp, mean = sum / n;
+                out.image[static_cast<size_t>(k)] = mean;
+                // Standard error of the mean from the unbiased sample variance.
+                const double var = spp > 1 ? std::max(0.0, (sum2 - n * mean * mean) / (n - 1)) : 0.0;
+                out.image_stderr[static_cast<size_t>(k)] = std::sqrt(var / n);
+                continue;
+            }
+            // Merge equal columns, summing in sample order (stable sort keeps it).
+            std::stable_sort(entries.begin(), entries.end(),
+                             [](const Entry& a, const Entry& b) { return a.column < b.column; });
+            auto& row = rows[static_cast<size_t>(k)];
+            for (size_t i = 0; i < entries.size();) {
+                double w = 0;
+                size_t j = i;
+                for (; j < entries.size() && entries[j].column == entries[i].column; ++j) w += entries[j].weight;
+                row.push_back({entries[i].column, static_cast<float>(w / spp)});
+                i = j;
+            }
+        }
+        progress.add(std::min(K, (b + 1) * kBlock) - b * kBlock);
+    };
+
+    {
+        const int threads = opt.threads > 0 ? opt.threads : static_cast<int>(std::thread::hardware_concurrency());
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(std::max(1, threads)));
+        tbb::parallel_for(0L, blocks, render_block);
+    }
+    for (const auto& s : block_stats) out.stats.merge(s);
+
+    if (!pattern) {
+        CsrMatrix& T = out.T;
+        T.rows = K;
+        T.cols = L;
+        T.indptr.assign(static_cast<size_t>(K) + 1, 0);
+        size_t nnz = 0;
+        for (long k = 0; k < K; ++k) nnz += rows[static_cast<size_t>(k)].size();
+        T.indices.reserve(nnz);
+        T.data.reserve(nnz);
+        for (long k = 0; k < K; ++k) {
+            for (const auto& [c, v] : rows[static_cast<size_t>(k)]) {
+                T.indices.push_back(c);
+                T.data.push_back(v);
+            }
+            T.indptr[static_cast<size_t>(k) + 1] = static_cast<std::int64_t>(T.indices.size());
+            std::vector<std::pair<std::int32_t, float>>().swap(rows[static_cast<size_t>(k)]);
+        }
+    }
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return out;
+}
+
+}  // namespace ltm

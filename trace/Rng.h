@@ -1,0 +1,44 @@
+#pragma once
+// Counter-based random numbers: every (seed, pixel, sample) triple owns an independent stream, so
+// results do not depend on which thread renders which pixel, nor in what order.
+// The stream is PCG32 (O'Neill 2014, pcg32_random_r) seeded by SplitMix64 hashes of the triple.
+#include <cstdint>
+
+namespace ltm {
+
+inline std::uint64_t splitmix64(std::uint64_t x) {
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+class Rng {
+public:
+    Rng(std::uint64_t seed, std::uint64_t stream_a, std::uint64_t stream_b = 0) {
+        const std::uint64_t h = splitmix64(splitmix64(seed) ^ splitmix64(stream_a + 0x632be59bd9b4e019ull) ^
+                                           splitmix64(stream_b + 0x8cb92ba72f3d8dd7ull));
+        inc_ = (splitmix64(h) << 1u) | 1u;
+        state_ = 0;
+        next_u32();
+        state_ += h;
+        next_u32();
+    }
+    std::uint32_t next_u32() {
+        const std::uint64_t old = state_;
+        state_ = old * 6364136223846793005ull + inc_;
+        const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
+        const auto rot = static_cast<std::uint32_t>(old >> 59u);
+        return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
+    }
+    // Uniform in [0, 1) with 53 random bits.
+    double uniform() {
+        const std::uint64_t hi = next_u32(), lo = next_u32();
+        return static_cast<double>(((hi << 32) | lo) >> 11) * 0x1.0p-53;
+    }
+
+private:
+    std::uint64_t state_ = 0, inc_ = 1;
+};
+
+}  // namespace ltm

@@ -1,0 +1,445 @@
+#include "trace/Tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <limits>
+#include <stdexcept>
+
+#include "trace/Intersect.h"
+#include "trace/Optics.h"
+
+namespace ltm {
+
+namespace {
+constexpr double kFloatUlp = 1.0 / (1 << 23);  // relative spacing of floats
+}
+
+const char* to_string(Representation r) {
+    switch (r) {
+        case Representation::Refined: return "refined";
+        case Representation::Analytic: return "analytic";
+        case Representation::MeshOnly: return "mesh-only";
+    }
+    return "?";
+}
+
+void PathStats::merge(const PathStats& o) {
+    paths += o.paths;
+    segments += o.segments;
+    reflections += o.reflections;
+    transmissions += o.transmissions;
+    tir += o.tir;
+    absorbed_particle += o.absorbed_particle;
+    absorbed_rim += o.absorbed_rim;
+    on_display += o.on_display;
+    off_display += o.off_display;
+    toward_camera += o.toward_camera;
+    roulette_kills += o.roulette_kills;
+    truncated += o.truncated;
+    nan_events += o.nan_events;
+    spurious_candidates += o.spurious_candidates;
+    guard_hits += o.guard_hits;
+    leak_retries += o.leak_retries;
+    leaks_unresolved += o.leaks_unresolved;
+    display_weight += o.display_weight;
+    lost_weight += o.lost_weight;
+    absorbed_weight += o.absorbed_weight;
+}
+
+// One interface crossing found by next_hit: the exact point, its surface and the unit normal
+// pointing from the surface's `inside` medium to its `outside`.
+struct Tracer::Hit {
+    bool found = false;
+    double t = INFINITY;
+    Vec3 p, n_out;
+    int tag = -1;
+    std::uint32_t prim = 0;
+    bool triangle = false;
+    double offset = 0;  // how far a spawned ray must start off the surface
+};
+
+struct Tracer::State {
+    Vec3 o, d;
+    Medium medium = Medium::Air;
+    double weight = 1;
+    // The triangle just left, skipped by the next query while the ray is still within the band
+    // in which facet and surface can differ.
+    std::uint32_t skip_prim = 0;
+    bool skip = false;
+    double skip_until = 0;
+};
+
+Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
+    : scene_(scene),
+      solid_(solid),
+      options_(options),
+      lens_(scene.object.lens),
+      display_(scene.display),
+      camera_(scene.camera, std::min(lens_.z_front(0), lens_.z_front(lens_.aperture_radius())) - 1.0) {
+    const double a = lens_.aperture_radius();
+    scale_ = std::max({a, lens_.spec().center_thickness, std::fabs(scene.display.z)});
+    object_patches_ = object_patches(lens_);
+    for (size_t k = 0; k < scene.defects.size(); ++k)
+        if (k < solid.corefined.size() && solid.corefined[k]) cutters_.emplace_back(lens_, scene.defects[k]);
+
+    // Enclosed ellipsoid defects (bubbles and particles that cut nothing) as exact primitives.
+    std::vector<Patch> ellipsoids;
+    std::vector<bool> is_ellipsoid_tag(solid.surfaces.size(), false);
+    for (size_t k = 0; k < scene.defects.size(); ++k) {
+        const Defect& d = scene.defects[k];
+        if (d.type == DefectType::Scratch || (k < solid.corefined.size() && solid.corefined[k])) continue;
+        Patch p;
+        p.kind = Patch::Kind::Closed;
+        for (size_t t = 0; t < solid.surfaces.size(); ++t)
+            if (solid.surfaces[static_cast<int>(t)].defect == static_cast<int>(k)) {
+                p.tag = static_cast<int>(t);
+                is_ellipsoid_tag[t] = true;
+                break;
+            }
+        p.surface = solid.surfaces[p.tag].surface;
+        // Axis-aligned box of the ellipsoid: the half-extent along world axis i is
+        // sqrt(sum_j (F_ij e_j)^2).
+        Vec3 h;
+        for (int i = 0; i < 3; ++i)
+            h[i] = std::sqrt(std::pow(d.frame(i, 0) * d.semi_axes.x, 2) + std::pow(d.frame(i, 1) * d.semi_axes.y, 2) +
+                             std::pow(d.frame(i, 2) * d.semi_axes.z, 2));
+        p.bounds = {d.center - h, d.center + h};
+        ellipsoids.push_back(p);
+    }
+    switch (options_.representation) {
+        case Representation::Analytic: {
+            std::string why;
+            if (!analytic_supported(solid, &why)) throw std::invalid_argument("the analytic representation " + why);
+            user_patches_ = object_patches_;
+            user_patches_.insert(user_patches_.end(), ellipsoids.begin(), ellipsoids.end());
+            embree_ = std::make_unique<EmbreeScene>(nullptr, &user_patches_, options_.robust);
+            break;
+        }
+        case Representation::Refined:
+            // Triangles for the object's faces and the walls Booleans cut; the enclosed
+            // ellipsoids' shells are replaced by their exact surfaces.
+            tri_mesh_ = solid.mesh.filtered([&](int tag) { return !is_ellipsoid_tag[static_cast<size_t>(tag)]; });
+            user_patches_ = ellipsoids;
+            embree_ = std::make_unique<EmbreeScene>(&tri_mesh_, &user_patches_, options_.robust);
+            break;
+        case Representation::MeshOnly:
+            tri_mesh_ = solid.mesh;
+            embree_ = std::make_unique<EmbreeScene>(&tri_mesh_, nullptr, options_.robust);
+            break;
+    }
+    face_normals_.resize(tri_mesh_.num_triangles());
+    for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
+}
+
+Tracer::~Tracer() = default;
+
+bool Tracer::analytic_supported(const Solid& solid, std::string* why) {
+    for (size_t k = 0; k < solid.corefined.size(); ++k)
+        if (solid.corefined[k]) {
+            if (why) *why = fmt::format("needs defects that neither touch a face nor each other; defect {} does", k);
+            return false;
+        }
+    return true;
+}
+
+double Tracer::index_of(Medium m) const { return m == Medium::Glass ? scene_.object.lens.ior : 1.0; }
+
+Medium Tracer::medium_at(const Vec3& p) const {
+    if (!lens_.contains(p)) return Medium::Air;
+    for (const auto& c : cutters_)
+        if (c.contains(p)) return Medium::Air;
+    for (size_t k = 0; k < scene_.defects.size(); ++k) {
+        const Defect& d = scene_.defects[k];
+        if (d.type == DefectType::Scratch) continue;
+        const Vec3 y = d.frame.transposed() * (p - d.center);
+        const Vec3& e = d.semi_axes;
+        if ((y.x / e.x) * (y.x / e.x) + (y.y / e.y) * (y.y / e.y) + (y.z / e.z) * (y.z / e.z) < 1.0)
+            return d.type == DefectType::Particle ? Medium::Absorber : Medium::Air;
+    }
+    return Medium::Glass;
+}
+
+Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
+    const Vec3& o = st.o;
+    const Vec3& d = st.d;
+    const SurfaceTable& table = solid_.surfaces;
+    auto finish = [&](Hit h) {
+        const SurfaceInfo& s = table[h.tag];
+        h.p = o + d * h.t;
+        h.n_out = s.surface.normal(h.p) * static_cast<double>(s.normal_sign);
+        h.offset = 2.0 * point_error_bound(s.surface, h.p);
+        h.found = true;
+        return h;
+    };
+
+    if (options_.representation == Representation::Analytic) {
+        const Candidate c = embree_->intersect(o, d, 0.0, INFINITY);
+        if (!c.hit) return {};
+        Hit h;
+        h.t = c.t;
+        h.tag = c.tag;
+        return finish(h);
+    }
+
+    if (options_.representation == Representation::MeshOnly) {
+        const std::uint32_t skip[1] = {st.skip_prim};
+        const Candidate c = embree_->intersect(o, d, 0.0, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
+        if (!c.hit) return {};
+        Hit h;
+        h.found = true;
+        h.t = c.t;
+        h.tag = c.tag;
+        h.prim = c.prim;
+        h.triangle = true;
+        h.p = o + d * c.t;
+        h.n_out = face_normals_[c.prim];
+        // The float hit's error: a few float ulps of the coordinates involved.
+        const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
+        h.offset = 8.0 * kFloatUlp * mag;
+        return h;
+    }
+
+    // Refined.
+    Vec3 b1, b2;
+    orthonormal_basis(d, b1, b2);
+    const double omag = std::max({std::fabs(o.x), std::fabs(o.y), std::fabs(o.z), 1e-3 * scale_});
+    Hit last_inconsistent;
+    for (int attempt = 0; attempt < 6; ++attempt) {
+        if (attempt > 0) ++stats.leak_retries;
+        // A jittered candidate ray, a few float ulps off the true one, steps past a vertex or
+        // edge the true ray slipped through; the hit is still solved for the true ray.
+        const double jitter = attempt == 0 ? 0.0 : 16.0 * attempt * kFloatUlp * omag;
+        const double ang = 2.399963229728653 * attempt;  // golden angle: a new direction each time
+        const Vec3 oq = o + (b1 * std::cos(ang) + b2 * std::sin(ang)) * jitter;
+        Hit best;
+        double tmin = 0;
+        for (int s = 0; s < 16; ++s) {
+            const std::uint32_t skip[1] = {st.skip_prim};
+            const Candidate c = embree_->intersect(oq, d, tmin, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
+            if (!c.hit) break;
+            if (c.analytic) {
+                // An enclosed ellipsoid, solved exactly for the jittered ray: re-solve for the true one.
+                const double tt = patch_hit(user_patches_[c.prim], o, d, 0.0, INFINITY);
+                if (std::isinf(tt)) {
+                    tmin = c.t + 4.0 * kFloatUlp * (omag + c.t);
+                    continue;
+                }
+                best.t = tt;
+                best.tag = c.tag;
+                break;
+            }
+            // Refine: the root of the tagged surface nearest the facet's distance. Facet and
+            // surface are at most the chord error e apart, i.e. e / |cos| along the ray, plus the
+            // float rounding of Embree's origin and distance.
+            const Surface& S = table[c.tag].surface;
+            const Roots roots = c.tag < static_cast<int>(object_patches_.size()) ? Roots{} : intersect(S, o, d);
+            const double cosf = std::fabs(dot(d, face_normals_[c.prim]));
+            const double window = 2.0 * solid_.tag_chord_error[static_cast<size_t>(c.tag)] / std::max(cosf, 1e-3) +
+                                  16.0 * kFloatUlp * (omag + c.t);
+            double te = INFINITY;
+            if (c.tag < static_cast<int>(object_patches_.size())) {
+                // The object's own faces: a root counts only on the patch (within the aperture, on
+                // the rim between the caps' edges), not on the rest of the sphere or cylinder.
+                te = patch_hit(object_patches_[static_cast<size_t>(c.tag)], o, d, std::max(0.0, c.t - window),
+                               c.t + window);
+            } else {
+                for (int i = 0; i < roots.count; ++i)
+                    if (roots.t[i] > 0 && std::fabs(roots.t[i] - c.t) < std::fabs(te - c.t)) te = roots.t[i];
+            }
+            if (std::fabs(te - c.t) <= window) {
+                best.t = te;
+                best.tag = c.tag;
+                best.prim = c.prim;
+                best.triangle = true;
+                break;
+            }
+            // A facet the true surface does not reach here: step past it.
+            ++stats.spurious_candidates;
+            tmin = c.t + 4.0 * kFloatUlp * (omag + c.t);
+        }
+        // The exact guard: the object's own patches, unless a cutting defect removed that spot.
+        for (const Patch& p : object_patches_) {
+            const double tg = patch_hit(p, o, d, 0.0, best.t);
+            if (tg < best.t) {
+                const Vec3 x = o + d * tg;
+                bool removed = false;
+                for (const auto& c : cutters_) removed = removed || c.contains(x);
+                if (removed) continue;
+                if (!best.triangle || best.tag != p.tag) ++stats.guard_hits;
+                best.t = tg;
+                best.tag = p.tag;
+                best.triangle = false;
+            }
+        }
+        if (std::isinf(best.t)) {
+            // Nothing ahead. Genuine in air; inside a closed medium it is a leak.
+            if (st.medium == Medium::Air) return {};
+            continue;
+        }
+        Hit h = finish(best);
+        const SurfaceInfo& s = table[h.tag];
+        const Medium from = dot(d, h.n_out) < 0 ? s.outside : s.inside;
+        if (from == st.medium) return h;
+        last_inconsistent = h;  // approached from the wrong medium: an earlier surface leaked
+    }
+    ++stats.leaks_unresolved;
+    return last_inconsistent;
+}
+
+template <bool Principal>
+void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) const {
+    const SurfaceTable& table = solid_.surfaces;
+    const double alpha = scene_.object.absorption;
+    for (int depth = 0;; ++depth) {
+        if (depth >= options_.max_depth) {
+            ++stats.truncated;
+            stats.lost_weight += st.weight;
+            if (rec) rec->truncated = true;
+            st.weight = 0;
+            return;
+        }
+        const Hit h = next_hit(st, stats);
+        ++stats.segments;
+        if (!h.found) return;  // escaped: the caller looks for the display
+        if (!is_finite(h.p) || !is_finite(h.n_out)) {
+            ++stats.nan_events;
+            if (rec) rec->nan = true;
+            st.weight = 0;
+            return;
+        }
+        if (st.medium == Medium::Glass && alpha > 0) {
+            const double keep = std::exp(-alpha * h.t);  // Beer-Lambert over the glass segment
+            stats.absorbed_weight += st.weight * (1 - keep);
+            st.weight *= keep;
+        }
+        if (rec) {
+            rec->vertices.push_back(h.p);
+            rec->tags.push_back(h.tag);
+        }
+        const SurfaceInfo& s = table[h.tag];
+        const bool entering = dot(st.d, h.n_out) < 0;  // crossing from `outside` into `inside`
+        const Medium from = entering ? s.outside : s.inside;
+        const Medium to = entering ? s.inside : s.outside;
+        if (to == Medium::Absorber) {
+            ++stats.absorbed_particle;
+            stats.absorbed_weight += st.weight;
+            if (rec) rec->absorbed = true;
+            st.weight = 0;
+            return;
+        }
+        if (s.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) {
+            ++stats.absorbed_rim;
+            stats.absorbed_weight += st.weight;
+            if (rec) rec->absorbed = true;
+            st.weight = 0;
+            return;
+        }
+        const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
+        const double eta = index_of(from) / index_of(to);
+        const double cos_i = -dot(st.d, nf);
+        const FresnelResult F = fresnel(cos_i, eta);
+        bool reflect_it;
+        if (F.total_internal_reflection) {
+            reflect_it = true;
+            ++stats.tir;
+            if (rec) ++rec->tir;
+        } else if (Principal) {
+            reflect_it = false;
+        } else {
+            reflect_it = rng->uniform() < F.reflectance;
+        }
+        Vec3 nd;
+        if (reflect_it) {
+            nd = reflect(st.d, nf);
+            if (!F.total_internal_reflection) ++stats.reflections;
+        } else {
+            nd = refract(st.d, nf, eta, cos_i, F.cos_t);
+            st.medium = to;
+            ++stats.transmissions;
+            if (rec) rec->transmission *= 1.0 - F.reflectance;
+        }
+        nd = normalize(nd);
+        if (!is_finite(nd)) {
+            ++stats.nan_events;
+            if (rec) rec->nan = true;
+            st.weight = 0;
+            return;
+        }
+        // Spawn off the surface on the side the new direction goes to.
+        const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
+        st.o = h.p + side * h.offset;
+        st.d = nd;
+        st.skip = h.triangle;
+        st.skip_prim = h.prim;
+        // The band in which the facet just left may still lie ahead of the ray: the chord error
+        // over the cosine, plus float rounding.
+        if (h.triangle) {
+            const double e = options_.representation == Representation::MeshOnly
+                                 ? 0.0
+                                 : solid_.tag_chord_error[static_cast<size_t>(h.tag)];
+            st.skip_until = (4.0 * e + 64.0 * kFloatUlp * scale_) / std::max(std::fabs(dot(nd, nf)), 1e-3);
+        }
+        if (!Principal && depth + 1 >= options_.rr_depth) {
+            if (rng->uniform() >= options_.rr_survival) {
+                ++stats.roulette_kills;
+                st.weight = 0;
+                return;
+            }
+            st.weight /= options_.rr_survival;
+        }
+    }
+}
+
+PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) const {
+    PrincipalPath rec;
+    PathStats stats;
+    State st;
+    st.o = origin;
+    st.d = normalize(direction);
+    st.medium = medium_at(origin);
+    if (st.medium == Medium::Absorber) {
+        rec.absorbed = true;
+        rec.direction = st.d;
+        return rec;
+    }
+    run<true>(st, nullptr, stats, &rec);
+    rec.direction = st.d;
+    if (!rec.absorbed && !rec.truncated && !rec.nan && st.medium == Medium::Air && st.d.z > 0) {
+        const double t = (display_.z - st.o.z) / st.d.z;
+        if (t > 0) {
+            rec.x = st.o.x + t * st.d.x;
+            rec.y = st.o.y + t * st.d.y;
+            rec.display_hit = display_.pixel(rec.x, rec.y, &rec.p, &rec.q) >= 0;
+        }
+    }
+    return rec;
+}
+
+PathResult Tracer::sample_path(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats) const {
+    ++stats.paths;
+    State st;
+    st.o = origin;
+    st.d = direction;
+    st.medium = Medium::Air;
+    run<false>(st, &rng, stats, nullptr);
+    PathResult r;
+    if (st.weight == 0) return r;
+    if (st.d.z <= 0) {
+        ++stats.toward_camera;
+        return r;
+    }
+    const double t = (display_.z - st.o.z) / st.d.z;
+    const long l = t > 0 ? display_.pixel(st.o.x + t * st.d.x, st.o.y + t * st.d.y) : -1;
+    if (l < 0) {
+        ++stats.off_display;
+        return r;
+    }
+    ++stats.on_display;
+    stats.display_weight += st.weight;
+    r.pixel = l;
+    r.weight = st.weight;
+    return r;
+}
+
+}  // namespace ltm

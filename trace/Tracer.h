@@ -1,0 +1,120 @@
+#pragma once
+// Paths of rays of sight from the camera through the object to the display.
+//
+// Three representations of the object (TracerOptions::representation):
+//  - Refined: Embree proposes candidate hits on the tagged triangle mesh; each is refined in
+//    double precision to the exact analytic surface its tag names (the mesh only says *which*
+//    surface is next). The object's own front, back and rim patches are also intersected exactly
+//    on every segment (three quadratics), so a ray can never leak through the object's faces
+//    whatever the mesh does at its vertices and edges, nor be misled by the gap between facets
+//    and the true surface. Leaks through defect walls (a miss inside a closed medium, or a hit
+//    approached from the wrong medium) are detected and the segment is re-queried with a
+//    candidate ray jittered by a few float ulps; the hit is still computed for the true ray.
+//  - Analytic: no mesh; the object's patches and its enclosed ellipsoid defects are Embree user
+//    geometry intersected exactly in the callback. Only for scenes whose defects neither touch a
+//    face nor each other (no Boolean).
+//  - MeshOnly: the triangle hit and the facet normal, no refinement: the baseline for the
+//    error-vs-time comparison.
+//
+// Spawned rays start from the hit point moved off the surface by a bound on the point's error
+// (Intersect.h, point_error_bound) along the normal, on the side the new direction goes to.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "defects/SolidBuilder.h"
+#include "defects/ToolShape.h"
+#include "scene/Scene.h"
+#include "trace/Camera.h"
+#include "trace/EmbreeScene.h"
+#include "trace/Patch.h"
+#include "trace/Rng.h"
+
+namespace ltm {
+
+enum class Representation { Refined, Analytic, MeshOnly };
+const char* to_string(Representation r);
+
+struct TracerOptions {
+    Representation representation = Representation::Refined;
+    bool robust = true;          // Embree's robust (watertight) traversal
+    int rr_depth = 64;           // Russian roulette from this interaction on ...
+    double rr_survival = 0.9;    // ... with this survival probability (weight / q keeps it unbiased)
+    int max_depth = 100000;      // a hard cap; the weight of paths it stops is reported as lost
+};
+
+// Counters of what paths did; merged across threads in a fixed order.
+struct PathStats {
+    std::uint64_t paths = 0, segments = 0, reflections = 0, transmissions = 0, tir = 0;
+    std::uint64_t absorbed_particle = 0, absorbed_rim = 0, on_display = 0, off_display = 0, toward_camera = 0;
+    std::uint64_t roulette_kills = 0, truncated = 0, nan_events = 0;
+    std::uint64_t spurious_candidates = 0, guard_hits = 0, leak_retries = 0, leaks_unresolved = 0;
+    double display_weight = 0, lost_weight = 0, absorbed_weight = 0;
+    void merge(const PathStats& o);
+};
+
+struct PrincipalPath {
+    std::vector<Vec3> vertices;
+    std::vector<int> tags;
+    Vec3 direction;
+    bool absorbed = false, truncated = false, nan = false;
+    bool display_hit = false;
+    double x = 0, y = 0;
+    int p = -1, q = -1;
+    double transmission = 1;  // product of (1 - R) at the transmitting interfaces
+    int tir = 0;
+};
+
+struct PathResult {
+    long pixel = -1;   // display pixel l, or -1
+    double weight = 0;
+};
+
+class Tracer {
+public:
+    Tracer(const Scene& scene, const Solid& solid, TracerOptions options = {});
+    ~Tracer();
+
+    // Whether the analytic representation can trace this scene (no defect cuts the glass).
+    static bool analytic_supported(const Solid& solid, std::string* why);
+
+    // The deterministic principal path: transmitted at every interface, reflected only under
+    // total internal reflection.
+    PrincipalPath principal_path(const Vec3& origin, const Vec3& direction) const;
+    // One Monte Carlo path with Fresnel reflection or transmission chosen with probability R.
+    PathResult sample_path(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats) const;
+
+    const Scene& scene() const { return scene_; }
+    const Solid& solid() const { return solid_; }
+    const Display& display() const { return display_; }
+    const TelecentricCamera& camera() const { return camera_; }
+    const EmbreeScene& embree() const { return *embree_; }
+    Representation representation() const { return options_.representation; }
+    // The medium at a point (air outside the object and inside voids).
+    Medium medium_at(const Vec3& p) const;
+
+private:
+    struct Hit;
+    struct State;
+    Hit next_hit(const State& st, PathStats& stats) const;
+    template <bool Principal>
+    void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record) const;
+    double index_of(Medium m) const;
+
+    const Scene& scene_;
+    const Solid& solid_;
+    TracerOptions options_;
+    Lens lens_;
+    Display display_;
+    TelecentricCamera camera_;
+    std::vector<Patch> object_patches_;   // the exact guard (Refined)
+    std::vector<Patch> user_patches_;     // user geometry (Analytic)
+    std::vector<ToolShape> cutters_;      // defects that cut the object's faces
+    TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
+    std::vector<Vec3> face_normals_;
+    std::unique_ptr<EmbreeScene> embree_;
+    double scale_ = 1;
+};
+
+}  // namespace ltm
