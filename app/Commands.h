@@ -9,6 +9,9 @@ namespace ltm::app {
 inline constexpr const char* kVersion = "0.1.0";
 
 void add_mesh_command(CLI::App& app);
+void add_render_command(CLI::App& app);
+void add_trace_rays_command(CLI::App& app);
+void add_validate_command(CLI::App& app);
 
 int exit_status();
 void set_exit_status(int status);

@@ -1,5 +1,5 @@
 // The ltmsim command. Subcommands arrive with the issues that ask for them
-// (docs/conventions.md, "Command line"): mesh.
+// (docs/conventions.md, "Command line"): mesh, render, trace-rays, validate.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fmt/format.h>
@@ -11,6 +11,9 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     app.set_version_flag("--version", std::string(ltm::app::kVersion));
     ltm::app::add_mesh_command(app);
+    ltm::app::add_render_command(app);
+    ltm::app::add_trace_rays_command(app);
+    ltm::app::add_validate_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -76,7 +76,7 @@ TEST(SceneLoaderUnknownKey, LensThicknessSuggestsCenterThickness) {
 TEST(SceneLoaderUnknownKey, WindowRadiusSaysWindowsAreFlat) {
     EXPECT_EQ(error_of("object:\n  type: window\n  thickness: 5\n  r1: 50\n"),
               "scene.yaml:4:3: object.r1: unknown key 'r1' for a window: windows have flat faces (use type: lens "
-              "for curved faces); valid keys are: type, thickness, diameter, ior, rim");
+              "for curved faces); valid keys are: type, thickness, diameter, ior, rim, absorption");
 }
 
 TEST(SceneLoaderUnknownKey, WindowCenterThicknessSuggestsThickness) {

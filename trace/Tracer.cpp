@@ -81,7 +81,12 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
     scale_ = std::max({a, lens_.spec().center_thickness, std::fabs(scene.display.z)});
     object_patches_ = object_patches(lens_);
     for (size_t k = 0; k < scene.defects.size(); ++k)
-        if (k < solid.corefined.size() && solid.corefined[k]) cutters_.emplace_back(lens_, scene.defects[k]);
+        if (k < solid.corefined.size() && solid.corefined[k]) {
+            Cutter c{ToolShape(lens_, scene.defects[k]), {}};
+            for (size_t t = 0; t < solid.surfaces.size(); ++t)
+                if (solid.surfaces[static_cast<int>(t)].defect == static_cast<int>(k)) c.tags.push_back(static_cast<int>(t));
+            cutters_.push_back(std::move(c));
+        }
 
     // Enclosed ellipsoid defects (bubbles and particles that cut nothing) as exact primitives.
     std::vector<Patch> ellipsoids;
@@ -148,7 +153,7 @@ double Tracer::index_of(Medium m) const { return m == Medium::Glass ? scene_.obj
 Medium Tracer::medium_at(const Vec3& p) const {
     if (!lens_.contains(p)) return Medium::Air;
     for (const auto& c : cutters_)
-        if (c.contains(p)) return Medium::Air;
+        if (c.shape.contains(p)) return Medium::Air;
     for (size_t k = 0; k < scene_.defects.size(); ++k) {
         const Defect& d = scene_.defects[k];
         if (d.type == DefectType::Scratch) continue;
@@ -158,6 +163,67 @@ Medium Tracer::medium_at(const Vec3& p) const {
             return d.type == DefectType::Particle ? Medium::Absorber : Medium::Air;
     }
     return Medium::Glass;
+}
+
+namespace {
+
+// Does the ray segment (0, tmax) meet the box?
+bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const Aabb& b) {
+    double t0 = 0, t1 = tmax;
+    for (int i = 0; i < 3; ++i) {
+        if (d[i] == 0) {
+            if (o[i] < b.lo[i] || o[i] > b.hi[i]) return false;
+            continue;
+        }
+        double a = (b.lo[i] - o[i]) / d[i], c = (b.hi[i] - o[i]) / d[i];
+        if (a > c) std::swap(a, c);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, c);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax) const {
+    Hit best;
+    auto removed = [&](const Vec3& x, const Cutter* except) {
+        for (const auto& c : cutters_)
+            if (&c != except && c.shape.contains(x)) return true;
+        return false;
+    };
+    // The object's own patches, unless a cutting defect removed that spot.
+    for (const Patch& p : object_patches_) {
+        const double t = patch_hit(p, o, d, 0.0, best.t < tmax ? best.t : tmax);
+        if (t < INFINITY && !removed(o + d * t, nullptr)) {
+            best.t = t;
+            best.tag = p.tag;
+        }
+    }
+    // The cutters' walls: a root of one of a cutter's surfaces is a crossing of the glass boundary
+    // where the ray enters or leaves the cutter's exact solid (membership changes across the root),
+    // inside the lens and outside every other cutter.
+    for (const auto& c : cutters_) {
+        const double limit = best.t < tmax ? best.t : tmax;
+        if (!segment_meets_box(o, d, limit, c.shape.bounds())) continue;
+        for (int tag : c.tags) {
+            const Roots r = intersect(solid_.surfaces[tag].surface, o, d);
+            for (int i = 0; i < r.count; ++i) {
+                const double t = r.t[i];
+                if (!(t > 0 && t < (best.t < tmax ? best.t : tmax))) continue;
+                const double delta = 1e-9 * (std::fabs(t) + scale_);
+                if (c.shape.contains(o + d * (t - delta)) == c.shape.contains(o + d * (t + delta))) continue;
+                const Vec3 x = o + d * t;
+                if (!lens_.contains(x) && lens_.signed_distance(x) < -delta) continue;
+                if (removed(x, &c)) continue;
+                best.t = t;
+                best.tag = tag;
+            }
+        }
+    }
+    if (best.tag >= 0) best.found = true;
+    return best;
 }
 
 Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
@@ -258,19 +324,12 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
             ++stats.spurious_candidates;
             tmin = c.t + 4.0 * kFloatUlp * (omag + c.t);
         }
-        // The exact guard: the object's own patches, unless a cutting defect removed that spot.
-        for (const Patch& p : object_patches_) {
-            const double tg = patch_hit(p, o, d, 0.0, best.t);
-            if (tg < best.t) {
-                const Vec3 x = o + d * tg;
-                bool removed = false;
-                for (const auto& c : cutters_) removed = removed || c.contains(x);
-                if (removed) continue;
-                if (!best.triangle || best.tag != p.tag) ++stats.guard_hits;
-                best.t = tg;
-                best.tag = p.tag;
-                best.triangle = false;
-            }
+        // The exact guard: the glass boundary solved analytically along the segment. A nearer
+        // crossing than the mesh's candidate means the mesh leaked or strayed from the surface.
+        const Hit g = exact_guard(o, d, best.t);
+        if (g.t < best.t) {
+            if (!best.triangle || best.tag != g.tag) ++stats.guard_hits;
+            best = g;
         }
         if (std::isinf(best.t)) {
             // Nothing ahead. Genuine in air; inside a closed medium it is a leak.
@@ -366,9 +425,13 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
             st.weight = 0;
             return;
         }
-        // Spawn off the surface on the side the new direction goes to.
+        // Spawn clear of the surface on the side the new direction goes to. Stepping along the new
+        // direction by offset / cos clears it by `offset` in normal distance without moving the
+        // ray sideways (an offset along the normal would shift the whole continuing path by up
+        // to the offset); near-tangent directions fall back to the normal offset.
+        const double cos_new = std::fabs(dot(nd, nf));
         const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
-        st.o = h.p + side * h.offset;
+        st.o = cos_new > 1e-3 ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
         st.d = nd;
         st.skip = h.triangle;
         st.skip_prim = h.prim;
@@ -389,6 +452,19 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
             st.weight /= options_.rr_survival;
         }
     }
+}
+
+Tracer::FirstHit Tracer::first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const {
+    State st;
+    st.o = origin;
+    st.d = normalize(direction);
+    st.medium = medium;
+    const Hit h = next_hit(st, stats);
+    FirstHit f;
+    f.found = h.found;
+    f.t = h.t;
+    f.tag = h.tag;
+    return f;
 }
 
 PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) const {

@@ -85,6 +85,14 @@ public:
     // One Monte Carlo path with Fresnel reflection or transmission chosen with probability R.
     PathResult sample_path(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats) const;
 
+    // The next interface along the ray from a point in `medium` (one segment of a path).
+    struct FirstHit {
+        bool found = false;
+        double t = INFINITY;
+        int tag = -1;
+    };
+    FirstHit first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const;
+
     const Scene& scene() const { return scene_; }
     const Solid& solid() const { return solid_; }
     const Display& display() const { return display_; }
@@ -110,7 +118,16 @@ private:
     TelecentricCamera camera_;
     std::vector<Patch> object_patches_;   // the exact guard (Refined)
     std::vector<Patch> user_patches_;     // user geometry (Analytic)
-    std::vector<ToolShape> cutters_;      // defects that cut the object's faces
+    // Defects that cut the glass (through the Boolean), with their exact solids and the surface
+    // tags bounding them: the guard classifies crossings of these along each segment.
+    struct Cutter {
+        ToolShape shape;
+        std::vector<int> tags;
+    };
+    std::vector<Cutter> cutters_;
+    // The exact guard: the nearest crossing of the glass boundary (object patches minus cutters,
+    // cutter walls inside the lens) in (0, tmax), or t = inf.
+    Hit exact_guard(const Vec3& o, const Vec3& d, double tmax) const;
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
     std::vector<Vec3> face_normals_;
     std::unique_ptr<EmbreeScene> embree_;

@@ -1,0 +1,172 @@
+// `ltmsim render SCENE -o DIR`: the light transport matrix DIR/ltm.npz and DIR/run.json; with
+// --pattern IMAGE, the camera image for that display pattern (DIR/image.exr, DIR/image.png).
+#include <filesystem>
+#include <fmt/format.h>
+#include <iostream>
+
+#include "app/Commands.h"
+#include "app/SceneSetup.h"
+#include "features/Image.h"
+#include "scene/SceneJson.h"
+#include "trace/LtmFile.h"
+#include "trace/Render.h"
+
+namespace ltm::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct RenderArgs {
+    std::string scene, dir, pattern, representation = "auto";
+    int threads = 0;
+    bool overwrite = false, verbose = false, no_robust = false;
+};
+
+std::string stats_json(const PathStats& s) {
+    return fmt::format(
+        "{{\"paths\": {}, \"segments\": {}, \"segments_per_path\": {}, \"reflections\": {}, \"transmissions\": {}, "
+        "\"total_internal_reflections\": {}, \"absorbed_by_particles\": {}, \"absorbed_by_rim\": {}, "
+        "\"on_display\": {}, \"off_display\": {}, \"toward_camera\": {}, \"roulette_kills\": {}, \"truncated\": {}, "
+        "\"nan_events\": {}, \"spurious_candidates\": {}, \"guard_hits\": {}, \"leak_retries\": {}, "
+        "\"leaks_unresolved\": {}, \"display_weight\": {}, \"lost_weight\": {}, \"absorbed_weight\": {}}}",
+        s.paths, s.segments, json_number(s.paths ? double(s.segments) / double(s.paths) : 0.0), s.reflections,
+        s.transmissions, s.tir, s.absorbed_particle, s.absorbed_rim, s.on_display, s.off_display, s.toward_camera,
+        s.roulette_kills, s.truncated, s.nan_events, s.spurious_candidates, s.guard_hits, s.leak_retries,
+        s.leaks_unresolved, json_number(s.display_weight), json_number(s.lost_weight), json_number(s.absorbed_weight));
+}
+
+int run(const RenderArgs& a) {
+    if (!output_folder_ok("render", a.dir)) return 2;
+    std::vector<std::string> outputs = a.pattern.empty() ? std::vector<std::string>{"ltm.npz", "run.json"}
+                                                          : std::vector<std::string>{"image.exr", "image.png", "run.json"};
+    if (!a.overwrite)
+        for (const auto& f : outputs)
+            if (fs::exists(fs::path(a.dir) / f)) {
+                std::cerr << fmt::format("ltmsim render: {} exists; pass --overwrite to replace it\n",
+                                         (fs::path(a.dir) / f).string());
+                return 2;
+            }
+    StageReport report;
+    int status = 0;
+    auto loaded = load_scene_and_solid(a.scene, report, status);
+    if (!loaded) return status;
+    const Scene& scene = loaded->scene;
+
+    std::vector<float> pattern;
+    if (!a.pattern.empty()) {
+        try {
+            const Image img = read_image(a.pattern);
+            if (img.width != scene.display.resolution[0] || img.height != scene.display.resolution[1]) {
+                std::cerr << fmt::format("ltmsim render: {}: the pattern is {} x {} pixels but the display is {} x {} "
+                                         "(display.resolution in {})\n",
+                                         a.pattern, img.width, img.height, scene.display.resolution[0],
+                                         scene.display.resolution[1], scene.source);
+                return 2;
+            }
+            pattern = pattern_values(img);
+        } catch (const std::exception& e) {
+            std::cerr << "ltmsim render: " << e.what() << "\n";
+            return 2;
+        }
+    }
+
+    TracerOptions topt;
+    topt.robust = !a.no_robust;
+    std::string why;
+    if (a.representation == "auto")
+        topt.representation = Tracer::analytic_supported(loaded->solid, &why) ? Representation::Analytic : Representation::Refined;
+    else if (a.representation == "refined") topt.representation = Representation::Refined;
+    else if (a.representation == "mesh-only") topt.representation = Representation::MeshOnly;
+    else {
+        if (!Tracer::analytic_supported(loaded->solid, &why)) {
+            std::cerr << fmt::format("ltmsim render: {}: the analytic representation {}; use --representation refined\n",
+                                     scene.source, why);
+            return 2;
+        }
+        topt.representation = Representation::Analytic;
+    }
+    StageTimer t_setup(&report, "trace-setup");
+    const Tracer tracer(scene, loaded->solid, topt);
+    t_setup.done(to_string(topt.representation));
+
+    RenderOptions ropt;
+    ropt.threads = a.threads;
+    ropt.progress = true;
+    ropt.pattern = pattern.empty() ? nullptr : &pattern;
+    StageTimer t_render(&report, "render");
+    const RenderResult r = render(tracer, ropt);
+    t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", r.stats.paths, r.stats.segments,
+                              r.stats.paths / std::max(r.seconds, 1e-9) / 1e6));
+
+    std::error_code ec;
+    fs::create_directories(a.dir, ec);
+    std::vector<fs::path> written;
+    try {
+        StageTimer t_write(&report, "write");
+        const fs::path dir(a.dir);
+        std::string result_json;
+        if (pattern.empty()) {
+            write_ltm_npz((dir / "ltm.npz").string(), r.T);
+            written.push_back(dir / "ltm.npz");
+            result_json = fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}}}", r.T.rows, r.T.cols, r.T.nnz());
+        } else {
+            const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
+            std::vector<float> y(r.image.begin(), r.image.end()), se(r.image_stderr.begin(), r.image_stderr.end());
+            write_exr((dir / "image.exr").string(), N, M, {{"Image", y}, {"StdError", se}});
+            written.push_back(dir / "image.exr");
+            Image preview;
+            preview.width = N;
+            preview.height = M;
+            preview.channels = 1;
+            double peak = 0;
+            for (double v : r.image) peak = std::max(peak, v);
+            for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
+            write_png((dir / "image.png").string(), preview);
+            written.push_back(dir / "image.png");
+            result_json = fmt::format("{{\"pattern\": {}, \"image\": \"image.exr\"}}", json_string(a.pattern));
+        }
+        t_write.done(a.dir);
+        const std::string run_json = fmt::format(
+            "{{\n  \"ltmsim_version\": \"{}\",\n  \"scene\": {},\n  \"seed\": {},\n  \"representation\": \"{}\",\n"
+            "  \"threads\": {},\n  \"result\": {},\n  \"render_seconds\": {},\n  \"stages\": {},\n  \"path_statistics\": {}\n}}\n",
+            kVersion, scene_to_json(scene, 2), scene.seed, to_string(topt.representation), a.threads, result_json,
+            json_number(r.seconds), report.to_json(), stats_json(r.stats));
+        write_text_atomically((dir / "run.json").string(), run_json);
+    } catch (const std::exception& e) {
+        for (const auto& p : written) fs::remove(p, ec);
+        std::cerr << "ltmsim render: " << e.what() << "\n";
+        return 1;
+    }
+    if (a.verbose) std::cerr << fmt::format("ltmsim render {} -> {}\n", a.scene, a.dir) << report.to_text();
+    if (r.stats.nan_events > 0) std::cerr << fmt::format("warning: {} paths produced a NaN (see run.json)\n", r.stats.nan_events);
+    return 0;
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app) {
+    auto args = std::make_shared<RenderArgs>();
+    CLI::App* cmd = app.add_subcommand("render", "Render the light transport matrix (or a pattern's camera image)");
+    cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
+    cmd->add_option("-o,--output", args->dir, "Output folder (created if missing; its parent must exist)")->required();
+    cmd->add_option("--pattern", args->pattern, "Render y = T x for this display pattern image (PNG or EXR) instead");
+    cmd->add_option("--threads", args->threads, "Threads (default: all cores); results do not depend on it")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--representation", args->representation,
+                    "auto (analytic when no defect cuts the glass, else refined) | refined | analytic | mesh-only")
+        ->check(CLI::IsMember({"auto", "refined", "analytic", "mesh-only"}));
+    cmd->add_flag("--no-robust", args->no_robust, "Embree's fast (non-watertight) traversal");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");
+    cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
+    cmd->callback([args] {
+        try {
+            set_exit_status(run(*args));
+        } catch (const std::exception& e) {
+            std::cerr << "ltmsim render: " << e.what() << "\n";
+            set_exit_status(1);
+        }
+    });
+}
+
+}  // namespace ltm::app

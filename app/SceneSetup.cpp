@@ -1,0 +1,46 @@
+#include "app/SceneSetup.h"
+
+#include <filesystem>
+#include <fmt/format.h>
+#include <iostream>
+
+#include "scene/SceneLoader.h"
+
+namespace ltm::app {
+
+std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status) {
+    LoadedScene out;
+    try {
+        StageTimer t(&report, "parse");
+        out.scene = load_scene(path);
+        t.done(fmt::format("{} defect(s)", out.scene.defects.size()));
+    } catch (const SceneError& e) {
+        std::cerr << e.what() << "\n";
+        status = 2;
+        return std::nullopt;
+    }
+    try {
+        out.solid = build_solid(Lens(out.scene.object.lens), out.scene.defects, out.scene.mesh, &report);
+    } catch (const std::invalid_argument& e) {
+        std::cerr << fmt::format("{}: {}\n", out.scene.source, e.what());
+        status = 2;
+        return std::nullopt;
+    }
+    return out;
+}
+
+bool output_folder_ok(const std::string& command, const std::string& dir) {
+    const std::filesystem::path p(dir);
+    const auto parent = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
+    if (!std::filesystem::is_directory(parent)) {
+        std::cerr << fmt::format("ltmsim {}: cannot write {}: folder {} does not exist\n", command, dir, parent.string());
+        return false;
+    }
+    if (std::filesystem::exists(p) && !std::filesystem::is_directory(p)) {
+        std::cerr << fmt::format("ltmsim {}: {} exists and is not a folder\n", command, dir);
+        return false;
+    }
+    return true;
+}
+
+}  // namespace ltm::app

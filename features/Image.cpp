@@ -1,0 +1,409 @@
+#include "features/Image.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfCompression.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <png.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csetjmp>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <sys/stat.h>
+
+#include "trace/LtmFile.h"
+
+namespace ltm {
+
+namespace {
+
+struct ReadError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+[[noreturn]] void bad(const std::string& what) { throw ReadError(what); }
+
+const unsigned char kPngMagic[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+const unsigned char kExrMagic[4] = {0x76, 0x2F, 0x31, 0x01};
+
+// The whole file, or its first `limit` bytes; throws ReadError for a missing, unreadable or
+// empty file.
+std::vector<unsigned char> read_bytes(const std::string& path, std::size_t limit = SIZE_MAX) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+        const int e = errno;
+        if (e == ENOENT) bad("no such file");
+        bad(std::string("cannot access it: ") + std::strerror(e));
+    }
+    if (S_ISDIR(st.st_mode)) bad("it is a folder");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) bad(std::string("cannot open it: ") + std::strerror(errno));
+    std::vector<unsigned char> bytes;
+    const auto size = static_cast<std::size_t>(std::max<off_t>(st.st_size, 0));
+    bytes.resize(std::min(size, limit));
+    in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    if (static_cast<std::size_t>(in.gcount()) != bytes.size()) bad("reading it failed");
+    if (bytes.empty()) bad("the file is empty");
+    return bytes;
+}
+
+bool starts_with(const std::vector<unsigned char>& b, const unsigned char* magic, std::size_t n) {
+    return b.size() >= n && std::memcmp(b.data(), magic, n) == 0;
+}
+
+std::string describe_start(const std::vector<unsigned char>& b) {
+    std::string s;
+    char buf[8];
+    for (std::size_t i = 0; i < std::min<std::size_t>(b.size(), 8); ++i) {
+        std::snprintf(buf, sizeof buf, "%s%02x", i ? " " : "", b[i]);
+        s += buf;
+    }
+    return s;
+}
+
+// ----- PNG via libpng; libpng reports errors by longjmp, so the decoder keeps no C++ objects
+// with destructors between setjmp and the libpng calls (only ones declared before setjmp). -----
+
+struct PngIo {
+    const unsigned char* data = nullptr;
+    std::size_t size = 0, pos = 0;
+    std::vector<unsigned char>* out = nullptr;
+    char message[512] = {};
+};
+
+void png_error_fn(png_structp png, png_const_charp msg) {
+    auto* io = static_cast<PngIo*>(png_get_error_ptr(png));
+    std::snprintf(io->message, sizeof io->message, "%s", msg ? msg : "unknown libpng error");
+    png_longjmp(png, 1);
+}
+void png_warning_fn(png_structp, png_const_charp) {}
+
+void png_read_fn(png_structp png, png_bytep out, png_size_t n) {
+    auto* io = static_cast<PngIo*>(png_get_io_ptr(png));
+    if (n > io->size - io->pos) png_error(png, "the file is truncated (unexpected end of data)");
+    std::memcpy(out, io->data + io->pos, n);
+    io->pos += n;
+}
+
+void png_write_fn(png_structp png, png_bytep in, png_size_t n) {
+    auto* io = static_cast<PngIo*>(png_get_io_ptr(png));
+    bool stored = true;
+    try {
+        io->out->insert(io->out->end(), in, in + n);
+    } catch (...) {  // an exception must not unwind through libpng's C frames
+        stored = false;
+    }
+    if (!stored) png_error(png, "out of memory");
+}
+void png_flush_fn(png_structp) {}
+
+// Decodes into `pixels` (8 or 16-bit samples, 1 or 3 channels); false with io.message on error.
+bool decode_png(PngIo& io, int& width, int& height, int& channels, int& depth, std::vector<unsigned char>& pixels,
+                std::vector<png_bytep>& rows) {
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &io, png_error_fn, png_warning_fn);
+    if (!png) {
+        std::snprintf(io.message, sizeof io.message, "libpng could not be initialised");
+        return false;
+    }
+    png_infop info = png_create_info_struct(png);
+    if (!info) {
+        png_destroy_read_struct(&png, nullptr, nullptr);
+        std::snprintf(io.message, sizeof io.message, "libpng could not be initialised");
+        return false;
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        return false;
+    }
+    png_set_read_fn(png, &io, png_read_fn);
+    png_read_info(png, info);
+    const int color = png_get_color_type(png, info);
+    const int bits = png_get_bit_depth(png, info);
+    if (color == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+    if (color == PNG_COLOR_TYPE_GRAY && bits < 8) png_set_expand_gray_1_2_4_to_8(png);
+    // libpng 1.6's palette expansion also turns a tRNS chunk into alpha: strip that too.
+    if ((color & PNG_COLOR_MASK_ALPHA) || png_get_valid(png, info, PNG_INFO_tRNS)) png_set_strip_alpha(png);
+    png_set_interlace_handling(png);
+    png_read_update_info(png, info);
+    width = static_cast<int>(png_get_image_width(png, info));
+    height = static_cast<int>(png_get_image_height(png, info));
+    channels = png_get_channels(png, info);
+    depth = png_get_bit_depth(png, info);
+    if ((channels != 1 && channels != 3) || (depth != 8 && depth != 16))
+        png_error(png, "unexpected pixel layout after conversion");
+    const std::size_t rowbytes = png_get_rowbytes(png, info);
+    if (rowbytes != static_cast<std::size_t>(width) * static_cast<std::size_t>(channels * depth / 8))
+        png_error(png, "unexpected row size after conversion");
+    pixels.resize(rowbytes * static_cast<std::size_t>(height));
+    rows.resize(static_cast<std::size_t>(height));
+    for (int r = 0; r < height; ++r) rows[static_cast<std::size_t>(r)] = pixels.data() + rowbytes * static_cast<std::size_t>(r);
+    png_read_image(png, rows.data());
+    png_read_end(png, nullptr);
+    png_destroy_read_struct(&png, &info, nullptr);
+    return true;
+}
+
+Image read_png_bytes(const std::vector<unsigned char>& bytes) {
+    PngIo io;
+    io.data = bytes.data();
+    io.size = bytes.size();
+    int width = 0, height = 0, channels = 0, depth = 0;
+    std::vector<unsigned char> pixels;
+    std::vector<png_bytep> rows;
+    bool ok;
+    try {
+        ok = decode_png(io, width, height, channels, depth, pixels, rows);
+    } catch (const std::bad_alloc&) {
+        bad("PNG image too large for memory");
+    }
+    if (!ok) bad(std::string("corrupt or unsupported PNG (libpng: ") + io.message + ")");
+    Image img(width, height, channels);
+    const std::size_t n = img.data.size();
+    if (depth == 8) {
+        for (std::size_t i = 0; i < n; ++i) img.data[i] = static_cast<float>(pixels[i]) / 255.0f;
+    } else {
+        for (std::size_t i = 0; i < n; ++i)
+            img.data[i] = static_cast<float>((pixels[2 * i] << 8) | pixels[2 * i + 1]) / 65535.0f;
+    }
+    return img;
+}
+
+// ----- OpenEXR -----
+
+using Channels = std::vector<std::pair<std::string, std::vector<float>>>;
+
+Channels read_exr_file(const std::string& path, int& width, int& height) {
+    const std::vector<unsigned char> head = read_bytes(path, 4);
+    if (!starts_with(head, kExrMagic, 4))
+        bad("not an OpenEXR file (it starts with " + describe_start(head) + ", not 76 2f 31 01)");
+    Channels out;
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        const std::int64_t w = std::int64_t(dw.max.x) - dw.min.x + 1, h = std::int64_t(dw.max.y) - dw.min.y + 1;
+        if (w <= 0 || h <= 0 || w > INT32_MAX || h > INT32_MAX) bad("it has an empty or invalid data window");
+        width = static_cast<int>(w);
+        height = static_cast<int>(h);
+        Imf::FrameBuffer fb;
+        const Imf::ChannelList& list = file.header().channels();
+        for (auto it = list.begin(); it != list.end(); ++it) {
+            if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
+                bad(std::string("channel '") + it.name() + "' is subsampled, which is not supported");
+            out.emplace_back(it.name(), std::vector<float>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h)));
+        }
+        if (out.empty()) bad("it has no channels");
+        for (auto& [name, values] : out)
+            fb.insert(name.c_str(), Imf::Slice::Make(Imf::FLOAT, values.data(), dw, sizeof(float),
+                                                     sizeof(float) * static_cast<std::size_t>(w)));
+        file.setFrameBuffer(fb);
+        if (!file.isComplete()) bad("the file is truncated or incomplete (some pixels are missing)");
+        file.readPixels(dw.min.y, dw.max.y);
+    } catch (const ReadError&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        bad("image too large for memory");
+    } catch (const std::exception& e) {
+        bad(std::string("corrupt or unsupported OpenEXR file (OpenEXR: ") + e.what() + ")");
+    }
+    return out;
+}
+
+Image exr_to_image(Channels channels, int width, int height) {
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    if (channels.size() == 1) {
+        Image img;
+        img.width = width;
+        img.height = height;
+        img.channels = 1;
+        img.data = std::move(channels[0].second);
+        return img;
+    }
+    const std::vector<float>* rgb[3] = {nullptr, nullptr, nullptr};
+    for (const auto& [name, values] : channels) {
+        if (name == "R") rgb[0] = &values;
+        if (name == "G") rgb[1] = &values;
+        if (name == "B") rgb[2] = &values;
+    }
+    if (!rgb[0] || !rgb[1] || !rgb[2]) {
+        std::string names;
+        for (const auto& c : channels) names += (names.empty() ? "" : ", ") + c.first;
+        bad("it has the channels " + names + ": a pattern needs a single channel, or channels R, G and B");
+    }
+    Image img(width, height, 3);
+    for (std::size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) img.data[3 * i + static_cast<std::size_t>(c)] = (*rgb[c])[i];
+    return img;
+}
+
+// Streams OpenEXR's output into an AtomicFileWriter (OpenEXR seeks back to write the line
+// offset table, which AtomicFileWriter supports).
+class AtomicOStream : public Imf::OStream {
+public:
+    explicit AtomicOStream(AtomicFileWriter& f) : Imf::OStream(f.path().c_str()), f_(f) {}
+    void write(const char c[], int n) override {
+        try {
+            f_.write(c, static_cast<std::size_t>(n));
+        } catch (const std::exception& e) {
+            if (error_.empty()) error_ = e.what();
+            throw;
+        }
+    }
+    uint64_t tellp() override { return f_.tell(); }
+    void seekp(uint64_t pos) override { f_.seek(pos); }
+    const std::string& error() const { return error_; }
+
+private:
+    AtomicFileWriter& f_;
+    std::string error_;
+};
+
+}  // namespace
+
+Image read_image(const std::string& path) {
+    try {
+        const std::vector<unsigned char> head = read_bytes(path, 8);
+        if (starts_with(head, kPngMagic, 8)) return read_png_bytes(read_bytes(path));
+        if (starts_with(head, kExrMagic, 4)) {
+            int w = 0, h = 0;
+            Channels channels = read_exr_file(path, w, h);  // OpenEXR reads the file itself
+            return exr_to_image(std::move(channels), w, h);
+        }
+        bad("not a PNG or OpenEXR file (unrecognised content, it starts with " + describe_start(head) + ")");
+    } catch (const ReadError& e) {
+        throw std::runtime_error("cannot read image '" + path + "': " + e.what());
+    }
+}
+
+std::vector<std::pair<std::string, std::vector<float>>> read_exr_channels(const std::string& path, int* width,
+                                                                         int* height) {
+    try {
+        int w = 0, h = 0;
+        Channels channels = read_exr_file(path, w, h);
+        if (width) *width = w;
+        if (height) *height = h;
+        return channels;
+    } catch (const ReadError& e) {
+        throw std::runtime_error("cannot read EXR image '" + path + "': " + e.what());
+    }
+}
+
+std::vector<float> pattern_values(const Image& img) {
+    const std::size_t n = img.pixel_count();
+    if (img.data.size() != n * static_cast<std::size_t>(std::max(img.channels, 0)))
+        throw std::invalid_argument("pattern_values: the image's data size does not match its dimensions");
+    if (img.channels == 1) return img.data;
+    if (img.channels != 3)
+        throw std::invalid_argument("pattern_values: a pattern image needs 1 or 3 channels, not " +
+                                    std::to_string(img.channels));
+    std::vector<float> y(n);
+    for (std::size_t i = 0; i < n; ++i)
+        y[i] = static_cast<float>(0.2126 * img.data[3 * i] + 0.7152 * img.data[3 * i + 1] + 0.0722 * img.data[3 * i + 2]);
+    return y;
+}
+
+void write_png(const std::string& path, const Image& img) {
+    auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write PNG image '" + path + "': " + why); };
+    if (img.width <= 0 || img.height <= 0)
+        fail("the image is empty (" + std::to_string(img.width) + " x " + std::to_string(img.height) + ")");
+    if (img.channels != 1 && img.channels != 3)
+        fail("the image has " + std::to_string(img.channels) + " channels; PNG output needs 1 (gray) or 3 (RGB)");
+    if (img.data.size() != img.pixel_count() * static_cast<std::size_t>(img.channels))
+        fail("the image's data size " + std::to_string(img.data.size()) + " does not match " + std::to_string(img.width) +
+             " x " + std::to_string(img.height) + " x " + std::to_string(img.channels));
+    std::vector<unsigned char> samples(img.data.size());
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        const float v = img.data[i];
+        if (std::isnan(v)) {
+            const std::size_t px = i / static_cast<std::size_t>(img.channels);
+            fail("the value at row " + std::to_string(px / static_cast<std::size_t>(img.width)) + ", column " +
+                 std::to_string(px % static_cast<std::size_t>(img.width)) + " is NaN");
+        }
+        samples[i] = static_cast<unsigned char>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0));
+    }
+    std::vector<png_bytep> rows(static_cast<std::size_t>(img.height));
+    const std::size_t rowbytes = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.channels);
+    for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = samples.data() + r * rowbytes;
+    std::vector<unsigned char> encoded;
+    encoded.reserve(samples.size() / 2 + 1024);
+    PngIo io;
+    io.out = &encoded;
+    volatile bool ok = false;
+    {
+        png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, png_error_fn, png_warning_fn);
+        png_infop info = png ? png_create_info_struct(png) : nullptr;
+        if (png && info) {
+            if (setjmp(png_jmpbuf(png)) == 0) {
+                png_set_write_fn(png, &io, png_write_fn, png_flush_fn);
+                png_set_IHDR(png, info, static_cast<png_uint_32>(img.width), static_cast<png_uint_32>(img.height), 8,
+                             img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                             PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+                png_write_info(png, info);
+                png_write_image(png, rows.data());
+                png_write_end(png, nullptr);
+                ok = true;
+            }
+        } else {
+            std::snprintf(io.message, sizeof io.message, "libpng could not be initialised");
+        }
+        png_destroy_write_struct(png ? &png : nullptr, info ? &info : nullptr);
+    }
+    if (!ok) fail(std::string("libpng: ") + io.message);
+    AtomicFileWriter file(path, "PNG image");
+    file.write(encoded.data(), encoded.size());
+    file.commit();
+}
+
+void write_exr(const std::string& path, int width, int height,
+               const std::vector<std::pair<std::string, std::vector<float>>>& channels) {
+    auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write EXR image '" + path + "': " + why); };
+    if (width <= 0 || height <= 0)
+        fail("the image is empty (" + std::to_string(width) + " x " + std::to_string(height) + ")");
+    if (channels.empty()) fail("no channels given");
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    std::set<std::string> names;
+    for (const auto& [name, values] : channels) {
+        if (name.empty()) fail("a channel has an empty name");
+        if (name.size() > 255) fail("the channel name '" + name + "' is longer than 255 characters");
+        if (!names.insert(name).second) fail("two channels are named '" + name + "'");
+        if (values.size() != n)
+            fail("channel '" + name + "' has " + std::to_string(values.size()) + " values, expected " +
+                 std::to_string(width) + " x " + std::to_string(height) + " = " + std::to_string(n));
+    }
+    AtomicFileWriter file(path, "EXR image");
+    {
+        AtomicOStream os(file);
+        try {
+            Imf::Header header(width, height);
+            header.compression() = Imf::ZIP_COMPRESSION;
+            header.lineOrder() = Imf::INCREASING_Y;
+            Imf::FrameBuffer fb;
+            for (const auto& [name, values] : channels) {
+                header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+                fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(values.data())),
+                                           sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
+            }
+            {
+                Imf::OutputFile out(os, header);
+                out.setFrameBuffer(fb);
+                out.writePixels(height);
+            }  // the destructor writes the line offset table (and swallows errors: checked below)
+        } catch (const std::exception& e) {
+            if (!os.error().empty()) throw std::runtime_error(os.error());
+            file.fail(std::string("OpenEXR: ") + e.what());
+        }
+        if (!os.error().empty()) throw std::runtime_error(os.error());
+    }
+    file.commit();
+}
+
+}  // namespace ltm

@@ -1,0 +1,81 @@
+#pragma once
+// Images in and out: display patterns read from PNG or OpenEXR, previews written as 8-bit PNG,
+// feature images written as multi-channel float OpenEXR.
+//
+// Orientation (docs: /work/shared/conventions.md): row 0 of an Image is the +y (top) edge of the
+// picture, column 0 the -x (left) edge; this is also the first row stored in a PNG and the first
+// scan line (lowest y of the data window) of an EXR, so a file looks the same in any viewer as
+// the camera or display sees it. For a display pattern, Image row p, column q is display pixel
+// (p, q), linear index l = p * Q + q (pattern_values gives exactly this flattening).
+//
+// Errors: every function that reads or writes a file throws std::runtime_error whose message
+// names the file and what is wrong (missing, empty, truncated, corrupt, unsupported kind, bad arguments). Writers are atomic
+// (trace/LtmFile.h, AtomicFileWriter): a failed write leaves an existing file untouched and no
+// temporary behind.
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ltm {
+
+struct Image {
+    int width = 0, height = 0, channels = 1;
+    std::vector<float> data;  // row-major, row 0 = the +y (top) edge, channels interleaved
+
+    Image() = default;
+    Image(int width_, int height_, int channels_ = 1)  // all zeros
+        : width(width_), height(height_), channels(channels_),
+          data(static_cast<std::size_t>(width_ > 0 ? width_ : 0) * static_cast<std::size_t>(height_ > 0 ? height_ : 0) *
+               static_cast<std::size_t>(channels_ > 0 ? channels_ : 0)) {}
+
+    std::size_t index(int row, int col, int ch = 0) const {
+        return (static_cast<std::size_t>(row) * static_cast<std::size_t>(width) + static_cast<std::size_t>(col)) *
+                   static_cast<std::size_t>(channels) +
+               static_cast<std::size_t>(ch);
+    }
+    float& at(int row, int col, int ch = 0) { return data[index(row, col, ch)]; }
+    float at(int row, int col, int ch = 0) const { return data[index(row, col, ch)]; }
+    std::size_t pixel_count() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+};
+
+// Reads a PNG or an OpenEXR file, recognised by its first bytes (never by the extension).
+//  PNG (libpng): 1, 2, 4, 8 and 16-bit; gray, gray + alpha, RGB, RGBA and palette images; the
+//    result has 1 channel (gray) or 3 (RGB; palette images are expanded to RGB). Values are the
+//    stored code values scaled to [0, 1] (v / 255, v / 65535, low bit depths as libpng expands
+//    them to 8 bits); no gamma or colour-profile conversion is applied, and alpha is dropped.
+//  OpenEXR: scan-line or tiled (level 0), first part; channels of any pixel type (HALF, FLOAT,
+//    UINT are converted to float) without subsampling. A file with a single channel gives a 1-channel
+//    image (whatever its name); otherwise it must have channels R, G and B, which give a
+//    3-channel image in that order (other channels, e.g. A, are ignored); anything else is an
+//    error listing the file's channels. Values are taken as stored (they may exceed [0, 1]).
+Image read_image(const std::string& path);
+
+// The single float value per pixel a display pattern needs, in pixel order (row-major from the
+// top row): 1 channel: the values as they are; 3 channels: the Rec. 709 / sRGB relative luminance
+// Y = 0.2126 R + 0.7152 G + 0.0722 B (ITU-R BT.709 primaries, weights summing to 1), evaluated
+// in double on the stored values and rounded to float. Other channel counts are an error
+// (std::invalid_argument).
+std::vector<float> pattern_values(const Image& img);
+
+// An 8-bit PNG: gray for 1 channel, RGB for 3 channels (other counts are an error). Each value is
+// clamped to [0, 1] and rounded to the nearest code value round(255 v) (so k / 255 is written as
+// k exactly); NaN is an error. Atomic.
+void write_png(const std::string& path, const Image& img);
+
+// An OpenEXR file with one 32-bit FLOAT channel per entry, named exactly as given (e.g.
+// "BrightField", "ScatterCount"), each holding width * height values in Image order (row 0 on
+// top). Scan lines in increasing y, ZIP compression (lossless, 16 lines per block), data and
+// display windows (0, 0) - (width - 1, height - 1). Names must be non-empty and distinct.
+// Written through the general interface (Imf::Header, Imf::FrameBuffer, Imf::OutputFile) into the
+// temporary of an AtomicFileWriter. Atomic.
+void write_exr(const std::string& path, int width, int height,
+               const std::vector<std::pair<std::string, std::vector<float>>>& channels);
+
+// Every channel of an OpenEXR file (see read_image for what is accepted), converted to float, in
+// the file's channel order, which OpenEXR always stores sorted by name (so the order written by
+// write_exr is not kept, only the names). width and height receive the data window's size
+// (may be null).
+std::vector<std::pair<std::string, std::vector<float>>> read_exr_channels(const std::string& path, int* width,
+                                                                         int* height);
+
+}  // namespace ltm

@@ -1,0 +1,146 @@
+// Monte Carlo renders against exact expectations: linearity of T (T x against a direct render of
+// the pattern) and row sums of a defect-free lens against the Fresnel transmission of its analytic
+// paths. Statistical tests: per-pixel Z-tests with a Bonferroni-corrected threshold
+// (tests/Tolerances.h), seeded, so they are reproducible.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "scene/SceneLoader.h"
+#include "tests/Tolerances.h"
+#include "trace/Render.h"
+#include "validation/AnalyticScene.h"
+
+using namespace ltm;
+
+namespace {
+
+const char* kScene = R"(
+object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
+defects:
+  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 1.0}
+  - {type: bubble, center: [5.0, 2.0, 0.0], radius: 0.8}
+camera: {resolution: [20, 20], size: [26.0, 26.0], numerical_aperture: 0.05, samples_per_pixel: 256}
+display: {resolution: [40, 40], size: [80.0, 80.0], z: 60.0}
+seed: 3
+)";
+
+struct Built {
+    Scene scene;
+    Solid solid;
+};
+Built build(const std::string& yaml) {
+    Built b;
+    b.scene = parse_scene(yaml, "test.yaml");
+    b.solid = build_solid(Lens(b.scene.object.lens), b.scene.defects, b.scene.mesh);
+    return b;
+}
+
+// Tests T x (from a T rendered with seed s) against y rendered directly with seed s + 1: two
+// independent estimates of the same mean, so Z = (Tx - y) / sqrt(se_T^2 + se_y^2). The direct
+// render reports se_y. For T x, every path weight is 1 in this scene (no absorption; roulette
+// only from the 64th interaction), so sample s contributes x[l_s] and its second moment is
+// sum_l T[k, l] x_l^2; se_T^2 = (m2 - m^2) / (n - 1).
+void expect_linear(const Tracer& tracer, const std::vector<float>& x, const char* name) {
+    const RenderResult t = render(tracer, {});
+    RenderOptions direct;
+    direct.pattern = &x;
+    direct.seed_offset = 1;
+    const RenderResult y = render(tracer, direct);
+    const double n = tracer.camera().samples_per_pixel();
+    std::vector<double> tx(static_cast<size_t>(t.T.rows));
+    t.T.multiply(x.data(), tx.data());
+    const double zmax = tol::bonferroni_z(t.T.rows);
+    int tested = 0;
+    double worst = 0;
+    for (size_t k = 0; k < tx.size(); ++k) {
+        double m2 = 0;
+        for (auto i = t.T.indptr[k]; i < t.T.indptr[k + 1]; ++i) {
+            const double xl = x[static_cast<size_t>(t.T.indices[static_cast<size_t>(i)])];
+            m2 += t.T.data[static_cast<size_t>(i)] * xl * xl;
+        }
+        const double se_t2 = std::max(0.0, (m2 - tx[k] * tx[k]) / (n - 1));
+        const double var = se_t2 + y.image_stderr[k] * y.image_stderr[k];
+        const double diff = tx[k] - y.image[k];
+        if (var == 0) {
+            // Both renders saw one value for every sample: they must agree up to the float32
+            // storage of T (relative 2^-24 per entry, summed over <= spp entries).
+            EXPECT_NEAR(tx[k], y.image[k], n * std::ldexp(1.0, -24) * (1 + std::fabs(y.image[k]))) << name << " pixel " << k;
+            continue;
+        }
+        ++tested;
+        const double z = diff / std::sqrt(var);
+        worst = std::max(worst, std::fabs(z));
+        EXPECT_LT(std::fabs(z), zmax) << name << " pixel " << k << ": T x = " << tx[k] << ", direct = " << y.image[k]
+                                      << ", se " << std::sqrt(var);
+    }
+    EXPECT_GT(tested, 100) << name;
+    ::testing::Test::RecordProperty(std::string(name) + "_max_abs_z", std::to_string(worst));
+}
+
+}  // namespace
+
+TEST(Linearity, TimesPatternEqualsTheDirectRender) {
+    const Built b = build(kScene);
+    const Tracer tracer(b.scene, b.solid);
+    const int Q = b.scene.display.resolution[0], P = b.scene.display.resolution[1];
+    std::vector<float> all_on(static_cast<size_t>(P * Q), 1.0f), checker(static_cast<size_t>(P * Q));
+    for (int p = 0; p < P; ++p)
+        for (int q = 0; q < Q; ++q) checker[static_cast<size_t>(p * Q + q)] = ((p / 4 + q / 4) % 2) ? 1.0f : 0.0f;
+    expect_linear(tracer, all_on, "all-on");
+    expect_linear(tracer, checker, "checkerboard");
+}
+
+TEST(RowSums, DefectFreeRowsSumToTheFresnelTransmissionOfTheirPaths) {
+    // For the same camera rays (regenerated from the same random streams), the expected row sum
+    // is the mean over the pixel's rays of tau, the exact probability (summed over the whole
+    // Fresnel branching tree by the independent reference solver) that a path ends on the
+    // display. Each sample lands there with probability tau_s and weight 1, so the row sum's
+    // variance is sum tau_s (1 - tau_s) / n^2.
+    const char* lens = R"(
+object: {type: lens, r1: 40.0, r2: -60.0, center_thickness: 5.0, diameter: 25.0, ior: 1.7}
+camera: {resolution: [16, 16], size: [26.0, 26.0], numerical_aperture: 0.05, samples_per_pixel: 400}
+display: {resolution: [50, 50], size: [120.0, 120.0], z: 50.0}
+seed: 11
+)";
+    const Built b = build(lens);
+    const Tracer tracer(b.scene, b.solid);
+    const validation::AnalyticScene reference(b.scene);
+    const RenderResult r = render(tracer, {});
+    const TelecentricCamera& cam = tracer.camera();
+    const int n = cam.samples_per_pixel();
+    const double zmax = tol::bonferroni_z(cam.pixels());
+    double total_diff = 0, total_var = 0;
+    for (long k = 0; k < cam.pixels(); ++k) {
+        const auto perm = cam.permutation(k, b.scene.seed);
+        double expected = 0, var = 0, dropped = 0;
+        for (int s = 0; s < n; ++s) {
+            Rng rng(b.scene.seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
+            Vec3 o, d;
+            cam.sample(k, s, perm, rng, o, d);
+            double drop = 0;
+            const double tau = reference.expected_display_throughput(o, d, 64, 1e-14, &drop);
+            expected += tau / n;
+            var += tau * (1 - tau) / (double(n) * n);
+            dropped += drop / n;
+        }
+        double sum = 0;
+        for (auto i = r.T.indptr[static_cast<size_t>(k)]; i < r.T.indptr[static_cast<size_t>(k) + 1]; ++i)
+            sum += r.T.data[static_cast<size_t>(i)];
+        // The reference drops branches lighter than 1e-14: the exact value lies in
+        // [expected, expected + dropped]; compare with the nearer end.
+        EXPECT_LT(dropped, 1e-6);
+        if (sum > expected) expected = std::min(sum, expected + dropped);
+        total_diff += sum - expected;
+        total_var += var;
+        if (var == 0) {
+            EXPECT_NEAR(sum, expected, 1e-5) << "pixel " << k;  // float32 storage of T
+            continue;
+        }
+        EXPECT_LT(std::fabs(sum - expected) / std::sqrt(var), zmax) << "pixel " << k << ": row sum " << sum
+                                                                    << ", expected " << expected;
+    }
+    // All pixels together: a single Z-test with the summed variance (pixels are independent).
+    EXPECT_LT(std::fabs(total_diff) / std::sqrt(total_var), tol::normal_two_sided_quantile(tol::kFamilyAlpha));
+    EXPECT_EQ(r.stats.nan_events, 0u);
+}

@@ -1,0 +1,97 @@
+#pragma once
+// `ltm.npz`: the light transport matrix on disk, in the format of scipy.sparse.save_npz, so that
+// `scipy.sparse.load_npz("ltm.npz")` returns it as a scipy.sparse.csr_matrix (float32 values).
+//
+// What write_ltm_npz writes (byte-for-byte deterministic: the same matrix and options always give
+// the same file):
+//   A ZIP archive of five .npy arrays, in this order (the order scipy.sparse.save_npz uses):
+//     indices.npy  '<i4', shape (nnz,)      column of each nonzero
+//     indptr.npy   '<i4', shape (rows + 1,) when nnz < 2^31, else '<i8' (scipy's own rule)
+//     format.npy   '|S3', shape ()          b'csr'
+//     shape.npy    '<i8', shape (2,)        (rows, cols)
+//     data.npy     '<f4', shape (nnz,)      value of each nonzero
+//   Each entry is deflate-compressed (ZIP method 8, raw zlib stream, level 6 by default, as
+//   numpy.savez_compressed does) with its zlib CRC-32, a fixed timestamp (1980-01-01 00:00) and
+//   no extra attributes. Each .npy is format version 1.0: "\x93NUMPY" 1 0, a little-endian uint16
+//   header length, and the header "{'descr': '<f4', 'fortran_order': False, 'shape': (N,), }"
+//   padded with spaces and ended by '\n' so that the preamble is a multiple of 64 bytes (as numpy
+//   pads it); the little-endian array data follows.
+//   ZIP64: an entry whose size (or worst-case compressed size, zlib's deflateBound) reaches
+//   0xFFFFFFFF bytes gets ZIP64 size fields in its local and central headers; an entry starting
+//   at or beyond 4 GiB gets a ZIP64 offset; an archive whose central directory lies beyond 4 GiB
+//   (or with 65535 entries or more) ends with a ZIP64 end-of-central-directory record and
+//   locator. So files above 4 GiB are written in full (APPNOTE 6.3, as Python's zipfile reads).
+//   NpzWriteOptions::force_zip64 writes every ZIP64 field even for small files (used by tests).
+//
+// Writing is atomic: the archive is streamed into a new temporary file in the target's folder
+// (".<name>.tmp-<random>"), fsync'ed and renamed onto the path; on any failure the temporary is
+// removed and an existing file at the path is left untouched. The matrix is checked first
+// (CsrMatrix::check). Errors are std::runtime_error naming the path.
+//
+// What read_ltm_npz reads: our files, and files written by scipy.sparse.save_npz for a CSR matrix,
+// compressed (the default; numpy writes every entry with ZIP64 local headers, "force_zip64") or
+// not (compressed=False: ZIP method 0, stored). ZIP64 records, data descriptors and archive
+// comments are understood; encrypted entries, multi-disk archives and other compression methods
+// are not. Accepted .npy headers: versions 1.0, 2.0 and 3.0, either byte order:
+//   data     float32 or float64 (converted to float32; a finite float64 that overflows float32
+//            is an error), 1-D
+//   indices  int32 or int64 (converted to int32; a value outside int32 is an error), 1-D
+//   indptr   int32 or int64, 1-D
+//   shape    int32 or int64, shape (2,), non-negative
+//   format   a bytes ('|S') or str ('<U') scalar equal to "csr" (anything else, e.g. "csc", is
+//            reported as "not a CSR matrix")
+// Other entries are ignored (as scipy ignores them). The matrix is then validated by
+// CsrMatrix::check, so unsorted or duplicate column indices in a row are rejected (scipy allows
+// them; call `T.sum_duplicates()` before saving). Every entry's size and CRC-32 are verified.
+// Errors are std::runtime_error naming the file and what is wrong: not a ZIP archive, truncated
+// or corrupt archive, CRC mismatch, missing array, bad dtype, bad shape, not a CSR matrix, or the
+// CsrMatrix::check message.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "trace/CsrMatrix.h"
+
+namespace ltm {
+
+struct NpzWriteOptions {
+    int compression_level = 6;  // zlib level 0..9 (0: deflate with stored blocks)
+    bool force_zip64 = false;   // ZIP64 fields in every header and a ZIP64 end record
+};
+
+void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options = {});
+CsrMatrix read_ltm_npz(const std::string& path);
+
+// A file written atomically: bytes go to a new temporary file (created with O_EXCL, mode 0666
+// minus the umask) in the folder of `path`; commit() fsyncs it, closes it and renames it onto
+// `path`. Destroying an uncommitted AtomicFileWriter (e.g. during an exception) removes the
+// temporary. Every error is a std::runtime_error "cannot write <kind> '<path>': <reason>"; the
+// constructor fails when the folder does not exist (naming it) or is not writable.
+// Also used by features/Image.cpp (PNG, EXR).
+class AtomicFileWriter {
+public:
+    AtomicFileWriter(const std::string& path, const std::string& kind);
+    ~AtomicFileWriter();
+    AtomicFileWriter(const AtomicFileWriter&) = delete;
+    AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+
+    // Writes at the current position and advances it (positions past the end extend the file).
+    void write(const void* bytes, std::size_t n);
+    std::uint64_t tell() const { return pos_; }
+    void seek(std::uint64_t pos) { pos_ = pos; }
+    void commit();
+    // Removes the temporary and throws "cannot write <kind> '<path>': <reason>".
+    [[noreturn]] void fail(const std::string& reason);
+
+    const std::string& path() const { return path_; }
+    const std::string& temporary_path() const { return tmp_; }
+
+private:
+    void discard() noexcept;
+    std::string path_, kind_, tmp_;
+    int fd_ = -1;
+    std::uint64_t pos_ = 0;
+    bool committed_ = false;
+};
+
+}  // namespace ltm
