@@ -34,8 +34,8 @@ Roots sphere(const Vec3& c, double r, const Vec3& o, const Vec3& d) {
     const Vec3 oc = o - c;
     const double b = dot(oc, d);
     const Vec3 perp = oc - d * b;
-    const double disc = (r - length(perp)) * (r + length(perp));
-    return solve_quadratic(1.0, 2.0 * b, (length(oc) - r) * (length(oc) + r), 4.0 * disc);
+    const double lp = length(perp), lo = length(oc);
+    return solve_quadratic(1.0, 2.0 * b, (lo - r) * (lo + r), 4.0 * (r - lp) * (r + lp));
 }
 
 Roots cylinder(const Vec3& c, const Vec3& u, double r, const Vec3& o, const Vec3& d) {

@@ -28,7 +28,7 @@ double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, doub
         if (!(t > tmin && t < tmax)) continue;
         if (p.kind == Patch::Kind::Closed) return t;
         const Vec3 x = o + d * t;
-        const double rho = std::hypot(x.x, x.y);
+        const double rho = std::sqrt(x.x * x.x + x.y * x.y);
         if (p.kind == Patch::Kind::Rim) {
             const double zs = slack * (std::fabs(p.z_lo) + std::fabs(p.z_hi) + p.a);
             if (x.z >= p.z_lo - zs && x.z <= p.z_hi + zs) return t;

@@ -57,6 +57,7 @@ struct Tracer::Hit {
     std::uint32_t prim = 0;
     bool triangle = false;
     double offset = 0;  // how far a spawned ray must start off the surface
+    int solved_patch = -1;  // an object patch already solved exactly over (0, t]
 };
 
 struct Tracer::State {
@@ -116,8 +117,9 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
         case Representation::Analytic: {
             std::string why;
             if (!analytic_supported(solid, &why)) throw std::invalid_argument("the analytic representation " + why);
-            user_patches_ = object_patches_;
-            user_patches_.insert(user_patches_.end(), ellipsoids.begin(), ellipsoids.end());
+            // The object's three patches are solved inline on every segment (every ray's box meets
+            // them, so a BVH only adds callback overhead); Embree holds the ellipsoid defects.
+            user_patches_ = ellipsoids;
             embree_ = std::make_unique<EmbreeScene>(nullptr, &user_patches_, options_.robust);
             break;
         }
@@ -186,7 +188,7 @@ bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const Aabb& b)
 
 }  // namespace
 
-Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax) const {
+Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const {
     Hit best;
     auto removed = [&](const Vec3& x, const Cutter* except) {
         for (const auto& c : cutters_)
@@ -195,6 +197,7 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax) const
     };
     // The object's own patches, unless a cutting defect removed that spot.
     for (const Patch& p : object_patches_) {
+        if (p.tag == solved_patch) continue;
         const double t = patch_hit(p, o, d, 0.0, best.t < tmax ? best.t : tmax);
         if (t < INFINITY && !removed(o + d * t, nullptr)) {
             best.t = t;
@@ -240,11 +243,22 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
     };
 
     if (options_.representation == Representation::Analytic) {
-        const Candidate c = embree_->intersect(o, d, 0.0, INFINITY);
-        if (!c.hit) return {};
         Hit h;
-        h.t = c.t;
-        h.tag = c.tag;
+        for (const Patch& p : object_patches_) {
+            const double t = patch_hit(p, o, d, 0.0, h.t);
+            if (t < h.t) {
+                h.t = t;
+                h.tag = p.tag;
+            }
+        }
+        if (!user_patches_.empty()) {
+            const Candidate c = embree_->intersect(o, d, 0.0, h.t);
+            if (c.hit && c.t < h.t) {
+                h.t = c.t;
+                h.tag = c.tag;
+            }
+        }
+        if (h.tag < 0) return {};
         return finish(h);
     }
 
@@ -306,9 +320,18 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
             double te = INFINITY;
             if (c.tag < static_cast<int>(object_patches_.size())) {
                 // The object's own faces: a root counts only on the patch (within the aperture, on
-                // the rim between the caps' edges), not on the rest of the sphere or cylinder.
-                te = patch_hit(object_patches_[static_cast<size_t>(c.tag)], o, d, std::max(0.0, c.t - window),
-                               c.t + window);
+                // the rim between the caps' edges), not on the rest of the sphere or cylinder. The
+                // solve covers (0, t + window], so the guard need not solve this patch again: a
+                // root before the window is a crossing the mesh missed, and it is taken.
+                te = patch_hit(object_patches_[static_cast<size_t>(c.tag)], o, d, 0.0, c.t + window);
+                if (te < c.t - window) {
+                    ++stats.guard_hits;
+                    best.t = te;
+                    best.tag = c.tag;
+                    best.solved_patch = c.tag;
+                    break;
+                }
+                if (te <= c.t + window) best.solved_patch = c.tag;
             } else {
                 for (int i = 0; i < roots.count; ++i)
                     if (roots.t[i] > 0 && std::fabs(roots.t[i] - c.t) < std::fabs(te - c.t)) te = roots.t[i];
@@ -326,7 +349,7 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
         }
         // The exact guard: the glass boundary solved analytically along the segment. A nearer
         // crossing than the mesh's candidate means the mesh leaked or strayed from the surface.
-        const Hit g = exact_guard(o, d, best.t);
+        const Hit g = exact_guard(o, d, best.t, best.solved_patch);
         if (g.t < best.t) {
             if (!best.triangle || best.tag != g.tag) ++stats.guard_hits;
             best = g;

@@ -10,9 +10,9 @@
 //    and the true surface. Leaks through defect walls (a miss inside a closed medium, or a hit
 //    approached from the wrong medium) are detected and the segment is re-queried with a
 //    candidate ray jittered by a few float ulps; the hit is still computed for the true ray.
-//  - Analytic: no mesh; the object's patches and its enclosed ellipsoid defects are Embree user
-//    geometry intersected exactly in the callback. Only for scenes whose defects neither touch a
-//    face nor each other (no Boolean).
+//  - Analytic: no mesh; the object's three patches are solved exactly inline on every segment and
+//    its enclosed ellipsoid defects are Embree user geometry intersected exactly in the callback.
+//    Only for scenes whose defects neither touch a face nor each other (no Boolean).
 //  - MeshOnly: the triangle hit and the facet normal, no refinement: the baseline for the
 //    error-vs-time comparison.
 //
@@ -127,7 +127,8 @@ private:
     std::vector<Cutter> cutters_;
     // The exact guard: the nearest crossing of the glass boundary (object patches minus cutters,
     // cutter walls inside the lens) in (0, tmax), or t = inf.
-    Hit exact_guard(const Vec3& o, const Vec3& d, double tmax) const;
+    // `solved_patch`: an object patch already solved over (0, tmax] by the refinement.
+    Hit exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const;
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
     std::vector<Vec3> face_normals_;
     std::unique_ptr<EmbreeScene> embree_;

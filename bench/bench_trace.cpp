@@ -1,0 +1,222 @@
+// Tracing benchmarks (issue 3). Medians of repeated runs in one process, on this machine:
+//   a. the paper scene (100 x 100 camera, 500 x 500 display, r1 = 50, r2 = -50, t = 6, D = 25 mm,
+//      three bubbles) at 256 samples per pixel: paths/s and ray segments/s, per representation;
+//   b. the same number of ray segments cast as bare rtcIntersect1 calls on the same triangle
+//      mesh (the segments of real paths, recorded, then replayed), same threads: efficiency a/b;
+//   c. display-hit error against the analytic reference and render time over tessellation levels,
+//      with and without refinement, and for the analytic primitives (CSV: error_vs_time.csv);
+//   d. time and memory against samples per pixel and camera resolution (CSV: scaling.csv).
+// Usage: bench_trace [--threads N] [--reps R] [--out DIR] [--quick]
+#include <sys/resource.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "scene/SceneLoader.h"
+#include "trace/Render.h"
+#include "validation/AnalyticScene.h"
+#include "validation/ValidationRays.h"
+
+using namespace ltm;
+
+namespace {
+
+std::string paper_scene(int n, int spp, double chord = 1e-3) {
+    char buf[1024];
+    std::snprintf(buf, sizeof buf, R"(
+object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
+defects:
+  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 0.0997}
+  - {type: bubble, center: [4.0, 0.0, 0.0], radius: 0.0997}
+  - {type: bubble, center: [8.0, 0.0, 0.0], radius: 0.0997}
+camera: {resolution: [%d, %d], size: [25.0, 25.0], numerical_aperture: 0.01, samples_per_pixel: %d}
+display: {resolution: [500, 500], size: [100.0, 100.0], z: 60.0}
+mesh: {chord_tolerance: %g}
+seed: 1
+)",
+                  n, n, spp, chord);
+    return buf;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+struct Setup {
+    Scene scene;
+    Solid solid;
+};
+Setup setup(const std::string& yaml) {
+    Setup s;
+    s.scene = parse_scene(yaml, "bench");
+    s.solid = build_solid(Lens(s.scene.object.lens), s.scene.defects, s.scene.mesh);
+    return s;
+}
+
+// Records the segments (origin, direction) of the paths of the first `pixels` pixels.
+std::vector<std::pair<Vec3, Vec3>> record_segments(const Tracer& t, long pixels) {
+    std::vector<std::pair<Vec3, Vec3>> segs;
+    const auto& cam = t.camera();
+    for (long k = 0; k < pixels; ++k) {
+        const auto perm = cam.permutation(k, t.scene().seed);
+        for (int s = 0; s < cam.samples_per_pixel(); ++s) {
+            Rng rng(t.scene().seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
+            Vec3 o, d;
+            cam.sample(k, s, perm, rng, o, d);
+            const PrincipalPath p = t.principal_path(o, d);
+            Vec3 from = o, dir = d;
+            segs.push_back({from, dir});
+            for (size_t i = 0; i + 1 < p.vertices.size(); ++i) segs.push_back({p.vertices[i], normalize(p.vertices[i + 1] - p.vertices[i])});
+            if (!p.vertices.empty()) segs.push_back({p.vertices.back(), p.direction});
+        }
+    }
+    return segs;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int threads = 2, reps = 3;
+    std::string out = ".";
+    bool quick = false;
+    for (int i = 1; i < argc; ++i) {
+        if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
+        else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
+        else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
+        else if (!std::strcmp(argv[i], "--quick")) quick = true;
+    }
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+    const int spp = quick ? 16 : 256;
+    std::printf("threads %d, repetitions %d (medians)\n\n", threads, reps);
+
+    // a + b.
+    const Setup paper = setup(paper_scene(100, spp));
+    std::printf("a. paper scene, 100 x 100 x %d spp, %zu mesh triangles\n", spp, paper.solid.mesh.num_triangles());
+    std::printf("%-10s %12s %14s %16s %12s\n", "repr", "seconds", "Mpaths/s", "Msegments/s", "seg/path");
+    double refined_seg_rate = 0, analytic_seg_rate = 0;
+    std::uint64_t segments = 0;
+    for (auto rep : {Representation::Analytic, Representation::Refined, Representation::MeshOnly}) {
+        TracerOptions o;
+        o.representation = rep;
+        const Tracer t(paper.scene, paper.solid, o);
+        std::vector<double> times;
+        RenderResult r;
+        for (int i = 0; i < reps; ++i) {
+            RenderOptions ro;
+            ro.threads = threads;
+            r = render(t, ro);
+            times.push_back(r.seconds);
+        }
+        const double s = median(times);
+        const double seg_rate = r.stats.segments / s;
+        if (rep == Representation::Refined) {
+            refined_seg_rate = seg_rate;
+            segments = r.stats.segments;
+        }
+        if (rep == Representation::Analytic) analytic_seg_rate = seg_rate;
+        std::printf("%-10s %12.3f %14.3f %16.3f %12.3f\n", to_string(rep), s, r.stats.paths / s / 1e6, seg_rate / 1e6,
+                    double(r.stats.segments) / r.stats.paths);
+    }
+    {
+        TracerOptions o;
+        o.representation = Representation::MeshOnly;  // its Embree scene: exactly the solid's triangles
+        const Tracer mesh(paper.scene, paper.solid, o);
+        TracerOptions ro;
+        const Tracer refined(paper.scene, paper.solid, ro);
+        const auto segs = record_segments(refined, 400);
+        std::vector<double> times;
+        for (int i = 0; i < reps; ++i) {
+            const double t0 = now();
+            const size_t n = segs.size();
+            std::vector<long> sink(static_cast<size_t>(threads) * 16, 0);
+            tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, segments, 4096), [&](const auto& range) {
+                long hits = 0;
+                for (std::uint64_t j = range.begin(); j != range.end(); ++j) {
+                    const auto& sg = segs[j % n];
+                    hits += mesh.embree().raw_intersect(sg.first, sg.second, 0.0f) >= 0;
+                }
+                sink[0] += hits;  // keeps the calls alive; races on the count are harmless here
+            });
+            times.push_back(now() - t0);
+        }
+        const double raw_rate = segments / median(times);
+        std::printf("\nb. %llu bare rtcIntersect1 calls (recorded path segments, replayed) on the same %zu triangles: "
+                    "%.3f Mrays/s\n   efficiency refined / bare = %.2f, analytic / bare = %.2f\n\n",
+                    static_cast<unsigned long long>(segments), paper.solid.mesh.num_triangles(), raw_rate / 1e6,
+                    refined_seg_rate / raw_rate, analytic_seg_rate / raw_rate);
+    }
+
+    // c. error vs time.
+    {
+        std::ofstream csv(out + "/error_vs_time.csv");
+        csv << "representation,chord_tolerance_mm,triangles,render_seconds,max_display_error_mm,median_display_error_mm\n";
+        std::printf("c. error vs time (100 x 100 x 16 spp renders; errors over the validation rays)\n");
+        std::printf("%-10s %10s %10s %10s %14s %14s\n", "repr", "chord mm", "triangles", "seconds", "max err mm", "median err mm");
+        for (double chord : {1e-2, 3e-3, 1e-3, 3e-4, 1e-4}) {
+            const Setup sc = setup(paper_scene(100, 16, chord));
+            const validation::AnalyticScene ref(sc.scene);
+            const auto rays = validation::validation_rays(sc.scene, 2);
+            for (auto rep : {Representation::Refined, Representation::MeshOnly, Representation::Analytic}) {
+                if (rep == Representation::Analytic && chord != 1e-3) continue;  // no mesh: one point
+                TracerOptions o;
+                o.representation = rep;
+                const Tracer t(sc.scene, sc.solid, o);
+                std::vector<double> times;
+                for (int i = 0; i < reps; ++i) {
+                    RenderOptions ro;
+                    ro.threads = threads;
+                    times.push_back(render(t, ro).seconds);
+                }
+                std::vector<double> errs;
+                for (const auto& ray : rays) {
+                    const auto a = ref.principal_path(ray.origin, ray.direction);
+                    const auto b = t.principal_path(ray.origin, ray.direction);
+                    if (!a.on_display || !b.display_hit) continue;
+                    errs.push_back(std::hypot(a.display_x - b.x, a.display_y - b.y));
+                }
+                const double mx = errs.empty() ? 0 : *std::max_element(errs.begin(), errs.end());
+                const double md = errs.empty() ? 0 : median(errs);
+                std::printf("%-10s %10.0e %10zu %10.3f %14.3e %14.3e\n", to_string(rep), chord,
+                            rep == Representation::Analytic ? size_t(0) : sc.solid.mesh.num_triangles(), median(times), mx, md);
+                csv << to_string(rep) << "," << chord << "," << (rep == Representation::Analytic ? 0 : sc.solid.mesh.num_triangles())
+                    << "," << median(times) << "," << mx << "," << md << "\n";
+            }
+        }
+    }
+
+    // d. scaling.
+    {
+        std::ofstream csv(out + "/scaling.csv");
+        csv << "camera_pixels_per_side,samples_per_pixel,paths,render_seconds,nnz,matrix_bytes,peak_rss_mb\n";
+        std::printf("\nd. scaling (refined)\n%8s %6s %12s %10s %12s %12s %12s\n", "camera", "spp", "paths", "seconds", "nnz",
+                    "T MB", "peak RSS MB");
+        const std::vector<std::pair<int, int>> configs =
+            quick ? std::vector<std::pair<int, int>>{{50, 16}, {100, 16}}
+                  : std::vector<std::pair<int, int>>{{100, 16}, {100, 64}, {100, 256}, {50, 64}, {200, 64}};
+        for (auto [n, s] : configs) {
+            const Setup sc = setup(paper_scene(n, s));
+            const Tracer t(sc.scene, sc.solid);
+            RenderOptions ro;
+            ro.threads = threads;
+            const RenderResult r = render(t, ro);
+            rusage ru{};
+            getrusage(RUSAGE_SELF, &ru);
+            const double bytes = r.T.nnz() * 8.0 + r.T.indptr.size() * 8.0;
+            std::printf("%8d %6d %12llu %10.3f %12zu %12.2f %12.1f\n", n, s, static_cast<unsigned long long>(r.stats.paths),
+                        r.seconds, r.T.nnz(), bytes / 1e6, ru.ru_maxrss / 1024.0);
+            csv << n << "," << s << "," << r.stats.paths << "," << r.seconds << "," << r.T.nnz() << "," << bytes << ","
+                << ru.ru_maxrss / 1024.0 << "\n";
+        }
+    }
+    return 0;
+}

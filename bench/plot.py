@@ -1,0 +1,49 @@
+#!/usr/bin/env python3
+"""Plots the tracing benchmark's CSV files (bench_trace --out DIR) as PNG images in DIR.
+
+error_vs_time.png: render time against display-hit error over tessellation levels, with and
+without refinement, and the analytic representation. scaling.png: time against paths.
+Needs Debian's python3-matplotlib.
+"""
+import csv
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+folder = sys.argv[1] if len(sys.argv) > 1 else "."
+
+rows = list(csv.DictReader(open(f"{folder}/error_vs_time.csv")))
+fig, ax = plt.subplots(figsize=(7, 4.5))
+for rep, marker in (("refined", "o"), ("mesh-only", "s"), ("analytic", "*")):
+    pts = [r for r in rows if r["representation"] == rep]
+    x = [float(r["render_seconds"]) for r in pts]
+    y = [max(float(r["max_display_error_mm"]), 1e-16) for r in pts]
+    ax.loglog(x, y, marker=marker, linestyle="-" if rep != "analytic" else "", label=rep, markersize=9)
+    for r, xi, yi in zip(pts, x, y):
+        if rep != "analytic":
+            ax.annotate(f'{float(r["chord_tolerance_mm"]):g} mm', (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=7)
+ax.set_xlabel("render time, 100 x 100 x 16 spp (s)")
+ax.set_ylabel("max display-hit error vs analytic reference (mm)")
+ax.set_title("Error against time over tessellation (chord tolerance) levels")
+ax.grid(True, which="both", alpha=0.3)
+ax.legend()
+fig.tight_layout()
+fig.savefig(f"{folder}/error_vs_time.png", dpi=120)
+
+rows = list(csv.DictReader(open(f"{folder}/scaling.csv")))
+fig, ax = plt.subplots(figsize=(7, 4.5))
+x = [float(r["paths"]) for r in rows]
+y = [float(r["render_seconds"]) for r in rows]
+ax.loglog(x, y, "o")
+for r, xi, yi in zip(rows, x, y):
+    ax.annotate(f'{r["camera_pixels_per_side"]}^2 x {r["samples_per_pixel"]}, T {float(r["matrix_bytes"]) / 1e6:.1f} MB',
+                (xi, yi), textcoords="offset points", xytext=(4, -10), fontsize=7)
+ax.set_xlabel("paths")
+ax.set_ylabel("render time (s)")
+ax.set_title("Scaling with samples per pixel and camera resolution")
+ax.grid(True, which="both", alpha=0.3)
+fig.tight_layout()
+fig.savefig(f"{folder}/scaling.png", dpi=120)
