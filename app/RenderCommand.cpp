@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "app/Commands.h"
+#include "app/FeatureOutputs.h"
 #include "app/SceneSetup.h"
 #include "features/Image.h"
 #include "scene/SceneJson.h"
@@ -21,6 +22,7 @@ struct RenderArgs {
     std::string scene, dir, pattern, representation = "auto";
     int threads = 0;
     bool overwrite = false, verbose = false, no_robust = false;
+    FeatureOptions features{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
 };
 
 std::string stats_json(const PathStats& s) {
@@ -38,7 +40,7 @@ std::string stats_json(const PathStats& s) {
 
 int run(const RenderArgs& a) {
     if (!output_folder_ok("render", a.dir)) return 2;
-    std::vector<std::string> outputs = a.pattern.empty() ? std::vector<std::string>{"ltm.npz", "run.json"}
+    std::vector<std::string> outputs = a.pattern.empty() ? std::vector<std::string>{"ltm.npz", "run.json", "features.exr"}
                                                           : std::vector<std::string>{"image.exr", "image.png", "run.json"};
     if (!a.overwrite)
         for (const auto& f : outputs)
@@ -53,6 +55,11 @@ int run(const RenderArgs& a) {
     if (!loaded) return status;
     const Scene& scene = loaded->scene;
 
+    if (a.features.dark_block > std::min(scene.display.resolution[0], scene.display.resolution[1])) {
+        std::cerr << fmt::format("ltmsim render: --dark-block {} exceeds the display's {} x {} pixels ({})\n",
+                                 a.features.dark_block, scene.display.resolution[0], scene.display.resolution[1], scene.source);
+        return 2;
+    }
     std::vector<float> pattern;
     if (!a.pattern.empty()) {
         try {
@@ -99,6 +106,40 @@ int run(const RenderArgs& a) {
     t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", r.stats.paths, r.stats.segments,
                               r.stats.paths / std::max(r.seconds, 1e-9) / 1e6));
 
+    // For a scene with defects, the defect-free object rendered with the same random numbers:
+    // away from the defects its paths are the very same, so the deflection map (mean display
+    // position minus the reference's) is exactly zero there, free of sampling noise.
+    // A defect-free scene is its own reference (its deflection map is zero by definition).
+    std::vector<float> reference;
+    if (pattern.empty()) {
+        StageTimer t_ref(&report, "reference");
+        RenderResult free_render;
+        if (!scene.defects.empty()) {
+            Scene free = scene;
+            free.defects.clear();
+            const Solid free_solid = build_solid(Lens(free.object.lens), {}, free.mesh);
+            TracerOptions fopt = topt;
+            fopt.representation =
+                topt.representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
+            free_render = render(Tracer(free, free_solid, fopt), ropt);
+        }
+        const RenderResult& rr = scene.defects.empty() ? r : free_render;
+        FeatureOptions means_only;
+        means_only.dark_block = 0;  // only MeanX and MeanY are used
+        const FeatureImages mean = compute_features(rr.T, scene.camera.resolution[0], scene.camera.resolution[1],
+                                                    {scene.display.resolution[0], scene.display.resolution[1],
+                                                     scene.display.size[0], scene.display.size[1]},
+                                                    means_only, nullptr);
+        const auto& mx = mean.channel("MeanX");
+        const auto& my = mean.channel("MeanY");
+        reference.resize(2 * mx.size());
+        for (size_t k = 0; k < mx.size(); ++k) {
+            reference[2 * k] = mx[k];
+            reference[2 * k + 1] = my[k];
+        }
+        t_ref.done(scene.defects.empty() ? "the scene itself (defect-free)" : "defect-free object, common random numbers");
+    }
+
     std::error_code ec;
     fs::create_directories(a.dir, ec);
     std::vector<fs::path> written;
@@ -110,6 +151,21 @@ int run(const RenderArgs& a) {
             write_ltm_npz((dir / "ltm.npz").string(), r.T);
             written.push_back(dir / "ltm.npz");
             result_json = fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}}}", r.T.rows, r.T.cols, r.T.nnz());
+            if (!reference.empty()) {
+                std::vector<float> mx(reference.size() / 2), my(reference.size() / 2);
+                for (size_t k = 0; k < mx.size(); ++k) {
+                    mx[k] = reference[2 * k];
+                    my[k] = reference[2 * k + 1];
+                }
+                write_exr((dir / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
+                          {{"MeanX", mx}, {"MeanY", my}});
+                written.push_back(dir / "reference.exr");
+            }
+            RenderGeometry g{scene.camera.resolution[0], scene.camera.resolution[1],
+                             {scene.display.resolution[0], scene.display.resolution[1], scene.display.size[0],
+                              scene.display.size[1]}};
+            write_features(a.dir, r.T, g, a.features, reference.empty() ? nullptr : &reference);
+            written.push_back(dir / "features.exr");
         } else {
             const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
             std::vector<float> y(r.image.begin(), r.image.end()), se(r.image_stderr.begin(), r.image_stderr.end());
@@ -157,6 +213,7 @@ void add_render_command(CLI::App& app) {
                     "auto (analytic when no defect cuts the glass, else refined) | refined | analytic | mesh-only")
         ->check(CLI::IsMember({"auto", "refined", "analytic", "mesh-only"}));
     cmd->add_flag("--no-robust", args->no_robust, "Embree's fast (non-watertight) traversal");
+    cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
     cmd->callback([args] {

@@ -1,6 +1,7 @@
 // `ltmsim trace-rays SCENE --rays FILE.jsonl`: the deterministic principal path of given rays
 // (docs/conventions.md): transmitted at every interface, reflected only under total internal
 // reflection. One JSON object per output line, in input order, on standard output.
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <fstream>
@@ -67,7 +68,11 @@ bool read_rays(const std::string& path, std::vector<InputRay>& out) {
         }
         if (!has_o) return bad("missing key \"origin\"");
         if (!has_d) return bad("missing key \"direction\"");
-        if (!(length(r.direction) > 0)) return bad("\"direction\" must not be the zero vector");
+        // Any finite non-zero vector is a direction: rescale by its largest component first, so
+        // neither 1e200 nor 1e-170 over- or underflows when its length is taken.
+        const double big = std::max({std::fabs(r.direction.x), std::fabs(r.direction.y), std::fabs(r.direction.z)});
+        if (!(big > 0)) return bad("\"direction\" must not be the zero vector");
+        r.direction = normalize(r.direction / big);
         out.push_back(r);
     }
     return true;

@@ -1,5 +1,5 @@
 // The ltmsim command. Subcommands arrive with the issues that ask for them
-// (docs/conventions.md, "Command line"): mesh, render, trace-rays, validate.
+// (docs/conventions.md, "Command line"): mesh, render, trace-rays, validate, features, experiment.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fmt/format.h>
@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
     ltm::app::add_render_command(app);
     ltm::app::add_trace_rays_command(app);
     ltm::app::add_validate_command(app);
+    ltm::app::add_features_command(app);
+    ltm::app::add_experiment_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -29,7 +29,9 @@ constexpr double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.
 constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-inline double length(const Vec3& v) { return std::hypot(v.x, v.y, v.z); }
+// sqrt(dot): lengths here are between ~1e-9 and ~1e6 mm, far from where squaring could overflow
+// or underflow, so the careful (and several times slower) std::hypot is not needed.
+inline double length(const Vec3& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 constexpr double length2(const Vec3& v) { return dot(v, v); }
 inline Vec3 normalize(const Vec3& v) { return v / length(v); }
 inline double distance(const Vec3& a, const Vec3& b) { return length(a - b); }

@@ -1,0 +1,96 @@
+#include "app/FeatureOutputs.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "app/JsonLine.h"
+#include "features/Image.h"
+#include "features/Plot.h"
+
+namespace ltm::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const JsonValue& member(const JsonValue& v, const std::string& key, const std::string& file) {
+    if (v.type == JsonValue::Type::Object)
+        for (const auto& [k, x] : v.object)
+            if (k == key) return x;
+    throw std::runtime_error(fmt::format("{}: missing \"{}\"", file, key));
+}
+
+double number_at(const JsonValue& v, size_t i, const std::string& file, const std::string& what) {
+    if (v.type != JsonValue::Type::Array || v.array.size() <= i || v.array[i].type != JsonValue::Type::Number)
+        throw std::runtime_error(fmt::format("{}: \"{}\" is not a list of numbers", file, what));
+    return v.array[i].number;
+}
+
+}  // namespace
+
+RenderGeometry read_render_geometry(const std::string& dir) {
+    const std::string file = (fs::path(dir) / "run.json").string();
+    std::ifstream in(file);
+    if (!in) throw std::runtime_error(fmt::format("{}: cannot read (it holds the camera and display of the render)", file));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    JsonValue root;
+    try {
+        root = parse_json_line(ss.str());
+    } catch (const JsonError& e) {
+        throw std::runtime_error(fmt::format("{}: malformed JSON ({})", file, e.what()));
+    }
+    const JsonValue& scene = member(root, "scene", file);
+    const JsonValue& cam = member(scene, "camera", file);
+    const JsonValue& disp = member(scene, "display", file);
+    RenderGeometry g;
+    g.camera_columns = static_cast<int>(number_at(member(cam, "resolution", file), 0, file, "camera.resolution"));
+    g.camera_rows = static_cast<int>(number_at(member(cam, "resolution", file), 1, file, "camera.resolution"));
+    g.display.Q = static_cast<int>(number_at(member(disp, "resolution", file), 0, file, "display.resolution"));
+    g.display.P = static_cast<int>(number_at(member(disp, "resolution", file), 1, file, "display.resolution"));
+    g.display.width = number_at(member(disp, "size", file), 0, file, "display.size");
+    g.display.height = number_at(member(disp, "size", file), 1, file, "display.size");
+    return g;
+}
+
+std::optional<std::vector<float>> read_reference(const std::string& dir, int camera_pixels) {
+    const fs::path file = fs::path(dir) / "reference.exr";
+    if (!fs::exists(file)) return std::nullopt;
+    int w = 0, h = 0;
+    const auto channels = read_exr_channels(file.string(), &w, &h);
+    const std::vector<float>* mx = nullptr;
+    const std::vector<float>* my = nullptr;
+    for (const auto& [name, values] : channels) {
+        if (name == "MeanX") mx = &values;
+        if (name == "MeanY") my = &values;
+    }
+    if (!mx || !my || w * h != camera_pixels)
+        throw std::runtime_error(fmt::format("{}: expected channels MeanX and MeanY of {} pixels", file.string(), camera_pixels));
+    std::vector<float> ref(2 * static_cast<size_t>(camera_pixels));
+    for (int k = 0; k < camera_pixels; ++k) {
+        ref[2 * static_cast<size_t>(k)] = (*mx)[static_cast<size_t>(k)];
+        ref[2 * static_cast<size_t>(k) + 1] = (*my)[static_cast<size_t>(k)];
+    }
+    return ref;
+}
+
+FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
+                             const FeatureOptions& options, const std::vector<float>* reference) {
+    FeatureOptions o = options;
+    if (o.dark_block < 0) o.dark_block = std::min({60, g.display.P, g.display.Q});  // automatic
+    const FeatureImages f = compute_features(T, g.camera_columns, g.camera_rows, g.display, o, reference);
+    write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);
+    const fs::path pngs = fs::path(dir) / "features";
+    fs::create_directories(pngs);
+    // Pseudo colour, scaled so a 100-pixel-wide image is ~400 pixels wide.
+    const int scale = std::max(1, 400 / std::max(1, f.width));
+    for (const auto& [name, values] : f.channels)
+        write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, name, NAN, NAN, scale);
+    return f;
+}
+
+}  // namespace ltm::app

@@ -1,0 +1,75 @@
+#pragma once
+// Numbers for defect images: regions of camera pixels, the contrast-to-noise ratio of a defect
+// against its surround, and a robust count of outlying pixels (false positives in a defect-free
+// image).
+//
+// Images are camera images in the conventions' order (docs: /work/shared/conventions.md): width
+// N columns, height M rows, pixel (m, n) at index k = m * N + n, row 0 the top (+y) edge.
+// Positions (cx, cy) are in pixel units on the image's own axes: x to the right along columns,
+// y DOWN along rows, the top-left corner of the image at (0, 0), so camera pixel (m, n) is the
+// unit square [n, n + 1] x [m, m + 1] with its centre at (n + 0.5, m + 0.5).
+#include <vector>
+
+namespace ltm {
+
+// A set of camera pixels. The functions below return the indices k in increasing order, each
+// once; the statistics below use whatever a Region holds (a pixel listed twice counts twice).
+struct Region {
+    std::vector<int> pixels;  // camera pixel indices k = m * width + n
+};
+
+// The pixels whose CENTRES lie within `radius` of (cx, cy): (n + 0.5 - cx)^2 + (m + 0.5 - cy)^2
+// <= radius^2 (inclusive, evaluated in double), clipped to the image. A disc of radius 0.5 (or 0)
+// around a pixel centre is exactly that pixel. width, height >= 0, radius >= 0 and finite
+// centres, else std::invalid_argument.
+Region disc_region(int width, int height, double cx, double cy, double radius);
+
+// The pixels whose centres lie at a distance d with r_in < d <= r_out (d^2 and the radii squared
+// compared in double, as disc_region): exactly subtract(disc_region(.., r_out),
+// disc_region(.., r_in)). 0 <= r_in <= r_out, else std::invalid_argument.
+Region annulus_region(int width, int height, double cx, double cy, double r_in, double r_out);
+
+// The pixels of a that are not in b, in a's order.
+Region subtract(const Region& a, const Region& b);
+
+struct ContrastResult {
+    double defect_mean = 0, surround_mean = 0, surround_std = 0, cnr = 0;
+    int defect_pixels = 0, surround_pixels = 0;  // finite pixels used
+};
+
+// Contrast-to-noise ratio CNR = |mean(defect) - mean(surround)| / std(surround), std the sample
+// standard deviation (divisor n - 1), all in double (two passes: the mean, then the squared
+// deviations). NaN (and +-inf) pixels are excluded; the counts are of the finite pixels used.
+// A noise-free surround (std == 0) gives cnr = +inf when the means differ and 0 when they are
+// equal (no contrast, no noise: nothing to see). A region with fewer than 2 finite pixels, or an
+// index outside the image, is std::invalid_argument.
+ContrastResult contrast_to_noise(const std::vector<float>& image, const Region& defect, const Region& surround);
+
+// 1 / Phi^-1(3/4) = 1.482602...: for Gaussian data, 1.4826 MAD is a consistent estimate of the
+// standard deviation (F. R. Hampel, "The influence curve and its role in robust estimation",
+// JASA 69 (1974) 383-393; P. J. Rousseeuw and C. Croux, "Alternatives to the median absolute
+// deviation", JASA 88 (1993) 1273-1283).
+constexpr double kMadToSigma = 1.4826;
+
+// The number of pixels in `valid` that deviate from the median of the valid pixels by more than
+// k * 1.4826 * MAD, MAD = median |x - median| (the median of an even count is the mean of the two
+// middle values): a k-sigma outlier test with the noise estimated robustly. Non-finite pixels:
+// NaN is excluded (neither tested nor part of the median); +-inf takes part like any value (so it
+// counts, unless infinities make up half the region).
+//
+// Why robust: the pixels we count are exactly the outliers, and a mean and standard deviation
+// would be pulled by them: m spikes of height h among n pixels inflate the standard deviation to
+// about sqrt(sigma^2 + m h^2 / n), so their own z-score stays below ~sqrt(n / m) however large h
+// is (masking: with many outliers, or few pixels, none is found). The median and MAD
+// have a 50% breakdown point: up to half the pixels can be arbitrary without moving them far, so
+// the threshold reflects the noise of the clean pixels only (see also C. Leys et al., "Detecting
+// outliers: Do not use standard deviation around the mean, use absolute deviation around the
+// median", J. Exp. Soc. Psychol. 49 (2013) 764-766).
+//
+// MAD == 0 (more than half the valid pixels share one value, e.g. a noise-free rendering): the
+// threshold is 0 and, with the strict comparison, every pixel that differs from the median counts.
+// An empty region (or one with only NaN) gives 0. k must be finite and >= 0, else
+// std::invalid_argument; an index outside the image is std::invalid_argument.
+int false_positives(const std::vector<float>& image, const Region& valid, double k = 5.0);
+
+}  // namespace ltm

@@ -1,0 +1,492 @@
+// The `ltmsim render` command's contract (docs: /work/shared/conventions.md, "Command line" and
+// "The light transport matrix"): DIR/ltm.npz (scipy CSR, float32, M*N x P*Q) and DIR/run.json;
+// results independent of --threads; existing outputs kept unless --overwrite; --pattern renders
+// y = T x (DIR/image.exr with "Image" and "StdError", DIR/image.png, no ltm.npz); bad input exits
+// with status 2, a message naming the file, and nothing written.
+//
+// The scene is small (20 x 20 camera pixels, 16 samples each, 40 x 40 display pixels): every
+// render takes a few milliseconds, so the test runs the real executable many times.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "features/Image.h"
+#include "tests/Tolerances.h"
+#include "trace/LtmFile.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kPython = "/usr/bin/python3";  // Debian's, with numpy and scipy
+
+// The paper's lens with two enclosed bubbles (as in tests/validation_render.cpp), at a resolution
+// that renders in milliseconds. `seed` is a parameter so that two independent renders can be made.
+std::string scene_yaml(int seed) {
+    return "object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}\n"
+           "defects:\n"
+           "  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 1.0}\n"
+           "  - {type: bubble, center: [5.0, 2.0, 0.0], radius: 0.8}\n"
+           "camera: {resolution: [20, 20], size: [26.0, 26.0], numerical_aperture: 0.05, samples_per_pixel: 16}\n"
+           "display: {resolution: [40, 40], size: [80.0, 80.0], z: 60.0}\n"
+           "seed: " +
+           std::to_string(seed) + "\n";
+}
+constexpr int kN = 20, kM = 20, kQ = 40, kP = 40, kSpp = 16;
+
+struct Outcome {
+    int status = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+// Runs `command` through the shell, capturing stdout and stderr into files of `dir`.
+Outcome run_shell(const std::string& command, const fs::path& dir) {
+    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+    const std::string cmd = command + " > '" + out.string() + "' 2> '" + err.string() + "'";
+    Outcome r;
+    const int raw = std::system(cmd.c_str());
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    fs::remove(out);
+    fs::remove(err);
+    return r;
+}
+Outcome ltmsim(const std::string& args, const fs::path& dir) { return run_shell(std::string(LTMSIM_EXE) + " " + args, dir); }
+
+bool python_has_scipy(const fs::path& dir) {
+    if (!fs::exists(kPython)) return false;
+    return run_shell(std::string(kPython) + " -c 'import numpy, scipy.sparse'", dir).status == 0;
+}
+
+// ---- a minimal 8-bit gray PNG writer, independent of features/Image.cpp ----
+// PNG (ISO/IEC 15948): signature, IHDR (width, height, bit depth 8, colour type 0 = gray, no
+// interlace), one IDAT holding a zlib stream (RFC 1950) of stored (uncompressed) deflate blocks
+// (RFC 1951, BTYPE 00) over the scan lines, each preceded by filter type 0, and IEND. Row 0 of
+// `codes` is the first scan line, i.e. the top (+y) edge of the picture and of the display.
+std::uint32_t crc32(const std::string& bytes) {
+    std::uint32_t c = 0xFFFFFFFFu;
+    for (unsigned char b : bytes) {
+        c ^= b;
+        for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return ~c;
+}
+void put_be32(std::string& s, std::uint32_t v) {
+    for (int sh = 24; sh >= 0; sh -= 8) s += static_cast<char>((v >> sh) & 0xFF);
+}
+void write_gray_png(const fs::path& path, int width, int height, const std::vector<std::uint8_t>& codes) {
+    std::string raw;
+    for (int r = 0; r < height; ++r) {
+        raw += '\0';
+        for (int c = 0; c < width; ++c) raw += static_cast<char>(codes[static_cast<size_t>(r * width + c)]);
+    }
+    std::string z = "\x78\x01";
+    for (size_t at = 0; at < raw.size() || at == 0;) {
+        const size_t n = std::min<size_t>(65535, raw.size() - at);
+        const bool last = at + n == raw.size();
+        z += static_cast<char>(last ? 1 : 0);
+        z += static_cast<char>(n & 0xFF);
+        z += static_cast<char>(n >> 8);
+        z += static_cast<char>(~n & 0xFF);
+        z += static_cast<char>((~n >> 8) & 0xFF);
+        z += raw.substr(at, n);
+        at += n;
+        if (last) break;
+    }
+    std::uint32_t a = 1, b = 0;
+    for (unsigned char ch : raw) {
+        a = (a + ch) % 65521;
+        b = (b + a) % 65521;
+    }
+    put_be32(z, (b << 16) | a);
+    auto chunk = [](const std::string& type, const std::string& data) {
+        std::string s;
+        put_be32(s, static_cast<std::uint32_t>(data.size()));
+        s += type + data;
+        put_be32(s, crc32(type + data));
+        return s;
+    };
+    std::string ihdr;
+    put_be32(ihdr, static_cast<std::uint32_t>(width));
+    put_be32(ihdr, static_cast<std::uint32_t>(height));
+    ihdr += std::string("\x08\x00\x00\x00\x00", 5);
+    std::ofstream out(path, std::ios::binary);
+    out << std::string("\x89PNG\r\n\x1a\n", 8) << chunk("IHDR", ihdr) << chunk("IDAT", z) << chunk("IEND", "");
+}
+
+class RenderCommand : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir = fs::temp_directory_path() / ("ltmsim-render-" + std::to_string(::getpid()) + "-" +
+                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+        scene = write("scene.yaml", scene_yaml(3));
+    }
+    void TearDown() override { fs::remove_all(dir); }
+    fs::path write(const std::string& name, const std::string& text) {
+        std::ofstream(dir / name) << text;
+        return dir / name;
+    }
+    std::string render(const fs::path& scene_file, const fs::path& out, const std::string& extra = "") {
+        return "render '" + scene_file.string() + "' -o '" + out.string() + "' " + extra;
+    }
+    static std::set<std::string> listing(const fs::path& folder) {
+        std::set<std::string> names;
+        for (const auto& e : fs::directory_iterator(folder)) names.insert(e.path().filename().string());
+        return names;
+    }
+    // Every file of a folder with its bytes.
+    static std::map<std::string, std::string> snapshot(const fs::path& folder) {
+        std::map<std::string, std::string> files;
+        for (const auto& e : fs::directory_iterator(folder)) files[e.path().filename().string()] = slurp(e.path());
+        return files;
+    }
+    // The render writes further files (feature images, previews: conventions.md); these tests
+    // check the ones named here and that no temporary (".name.tmp...") is left behind.
+    static void expect_outputs(const fs::path& folder, const std::set<std::string>& required,
+                               const std::set<std::string>& absent = {}) {
+        const std::set<std::string> names = listing(folder);
+        for (const auto& n : required) EXPECT_TRUE(names.count(n)) << folder << " lacks " << n;
+        for (const auto& n : absent) EXPECT_FALSE(names.count(n)) << folder << " holds " << n;
+        for (const auto& n : names) EXPECT_NE(n[0], '.') << folder << " holds a temporary " << n;
+    }
+    fs::path dir, scene;
+};
+
+// Python checks of the two files, printing "OK" or the failures (one per line).
+const char* kCheckScript = R"PY(
+import json, sys
+import numpy as np, scipy.sparse as sp
+npz, run, rows, cols, spp, slack = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), float(sys.argv[6])
+bad = []
+T = sp.load_npz(npz)
+if T.format != "csr": bad.append("format %s, expected csr" % T.format)
+if T.shape != (rows, cols): bad.append("shape %s, expected %s" % (T.shape, (rows, cols)))
+if T.dtype != np.float32: bad.append("dtype %s, expected float32" % T.dtype)
+if not T.has_canonical_format: bad.append("not in canonical format (sorted, no duplicates)")
+if T.nnz == 0: bad.append("no nonzeros")
+if not np.all(np.isfinite(T.data)) or np.any(T.data < 0): bad.append("negative or non-finite values")
+s = np.asarray(T.sum(axis=1, dtype=np.float64)).ravel()
+if s.max() > 1 + slack: bad.append("row sum %r > 1 + %g at row %d" % (s.max(), slack, int(s.argmax())))
+j = json.load(open(run))
+sc = j.get("scene", {})
+if sc.get("object", {}).get("r2") != -50: bad.append("scene.object.r2 = %r" % sc.get("object", {}).get("r2"))
+if sc.get("seed") != 3 or j.get("seed") != 3: bad.append("seed %r / %r" % (sc.get("seed"), j.get("seed")))
+if len(sc.get("defects", [])) != 2: bad.append("scene.defects: %r" % sc.get("defects"))
+if sc.get("camera", {}).get("samples_per_pixel") != spp: bad.append("camera.samples_per_pixel %r" % sc.get("camera"))
+if j.get("representation") not in ("analytic", "refined", "mesh-only"): bad.append("representation %r" % j.get("representation"))
+rs = j.get("render_seconds")
+if not isinstance(rs, (int, float)) or rs < 0: bad.append("render_seconds %r" % rs)
+st = j.get("stages")
+if not isinstance(st, list) or not any(isinstance(x, dict) and x.get("stage") == "render" and x.get("seconds", -1) >= 0 for x in st):
+    bad.append("stages without a timed 'render' stage: %r" % st)
+ps = j.get("path_statistics", {})
+if ps.get("nan_events") != 0: bad.append("nan_events %r" % ps.get("nan_events"))
+if ps.get("paths") != rows * spp: bad.append("paths %r, expected %d" % (ps.get("paths"), rows * spp))
+print("\n".join(bad) if bad else "OK")
+)PY";
+
+}  // namespace
+
+TEST_F(RenderCommand, WritesTheMatrixAndTheRunRecord) {
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(scene, out, "--threads 2"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_outputs(out, {"ltm.npz", "run.json"}, {"image.exr", "image.png"});
+
+    // Our own reader (trace/LtmFile.h) first: shape and row sums.
+    const ltm::CsrMatrix T = ltm::read_ltm_npz((out / "ltm.npz").string());
+    EXPECT_EQ(T.rows, kM * kN);
+    EXPECT_EQ(T.cols, kP * kQ);
+    EXPECT_EQ(T.check(), "");
+    EXPECT_GT(T.nnz(), 0u);
+    for (std::int64_t k = 0; k < T.rows; ++k) {
+        double sum = 0;
+        for (auto i = T.indptr[static_cast<size_t>(k)]; i < T.indptr[static_cast<size_t>(k) + 1]; ++i)
+            sum += T.data[static_cast<size_t>(i)];
+        EXPECT_LE(sum, 1.0 + ltm::tol::ltm_row_sum_slack()) << "row " << k;
+    }
+
+    // Then the contract's reader: scipy.sparse.load_npz, and Python's json for run.json.
+    if (!python_has_scipy(dir)) GTEST_SKIP() << kPython << " cannot import numpy and scipy.sparse";
+    const fs::path script = write("check.py", kCheckScript);
+    const Outcome py = run_shell(std::string(kPython) + " '" + script.string() + "' '" + (out / "ltm.npz").string() +
+                                     "' '" + (out / "run.json").string() + "' " + std::to_string(kM * kN) + " " +
+                                     std::to_string(kP * kQ) + " " + std::to_string(kSpp) + " " +
+                                     std::to_string(ltm::tol::ltm_row_sum_slack()),
+                                 dir);
+    EXPECT_EQ(py.status, 0) << py.err;
+    EXPECT_EQ(py.out, "OK\n") << py.err;
+}
+
+TEST_F(RenderCommand, TheMatrixDoesNotDependOnThreads) {
+    // "results do not depend on N", and the writer is byte-for-byte deterministic
+    // (trace/LtmFile.h): the two files must be identical.
+    ASSERT_EQ(ltmsim(render(scene, dir / "one", "--threads 1"), dir).status, 0);
+    ASSERT_EQ(ltmsim(render(scene, dir / "two", "--threads 2"), dir).status, 0);
+    const std::string a = slurp(dir / "one" / "ltm.npz"), b = slurp(dir / "two" / "ltm.npz");
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == b) << "ltm.npz differs between --threads 1 and --threads 2 (" << a.size() << " vs " << b.size()
+                        << " bytes)";
+}
+
+TEST_F(RenderCommand, ExistingOutputsAreKeptUnlessOverwrite) {
+    const fs::path out = dir / "out";
+    ASSERT_EQ(ltmsim(render(scene, out, "--threads 2"), dir).status, 0);
+    const auto first = snapshot(out);
+    const std::string npz = slurp(out / "ltm.npz");
+    ASSERT_FALSE(npz.empty());
+    ASSERT_FALSE(slurp(out / "run.json").empty());
+
+    const Outcome again = ltmsim(render(scene, out, "--threads 2"), dir);
+    EXPECT_EQ(again.status, 2) << again.err;
+    EXPECT_NE(again.err.find(out.string()), std::string::npos) << again.err;
+    EXPECT_NE(again.err.find("--overwrite"), std::string::npos) << again.err;
+    EXPECT_TRUE(snapshot(out) == first) << "the first render's files changed";
+
+    const Outcome forced = ltmsim(render(scene, out, "--threads 2 --overwrite"), dir);
+    EXPECT_EQ(forced.status, 0) << forced.err;
+    EXPECT_TRUE(slurp(out / "ltm.npz") == npz);  // same scene and seed: the same matrix, the same bytes
+    expect_outputs(out, {"ltm.npz", "run.json"});
+}
+
+namespace {
+
+// y and its standard error from DIR/image.exr.
+struct PatternImage {
+    std::vector<float> y, se;
+};
+PatternImage read_pattern_image(const fs::path& exr) {
+    int w = 0, h = 0;
+    const auto channels = ltm::read_exr_channels(exr.string(), &w, &h);
+    EXPECT_EQ(w, kN);
+    EXPECT_EQ(h, kM);
+    std::set<std::string> names;
+    PatternImage img;
+    for (const auto& [name, values] : channels) {
+        names.insert(name);
+        if (name == "Image") img.y = values;
+        if (name == "StdError") img.se = values;
+    }
+    EXPECT_EQ(names, (std::set<std::string>{"Image", "StdError"}));
+    EXPECT_EQ(img.y.size(), static_cast<size_t>(kN * kM));
+    EXPECT_EQ(img.se.size(), static_cast<size_t>(kN * kM));
+    return img;
+}
+
+}  // namespace
+
+// The pattern render against T x, through the files. Two relations:
+//  1. Same seed: `render --pattern` traces exactly the paths the plain render traced (the same
+//     per-pixel, per-sample random streams, trace/Render.cpp), so y = T x holds per pixel up to
+//     the float32 storage of T, y and x (tol::pattern_identity). A pseudo-random pattern makes
+//     this per-pixel identity sensitive to any misreading of the pattern (flipped rows or columns,
+//     a transposition): x is built here from the convention (PNG row 0 = display row p = 0 = +y
+//     edge, l = p * Q + q), independently of the project's image reader.
+//  2. Another seed: an independent estimate of the same expectation (tests/validation_render.cpp,
+//     expect_linear). With 16 samples per pixel a per-pixel normal Z-test is not justified (the
+//     per-pixel means are far from normal), so the test is on the sum over all pixels: pixels
+//     are independent, 400 x 16 samples make the sum normal, and its variance is the sum of the
+//     per-pixel variances se_T^2 + se_y^2. se_T (the standard error of T x) is exactly the
+//     StdError the same-seed pattern render reports (same samples, same values), so no assumption
+//     about path weights is needed.
+TEST_F(RenderCommand, PatternRenderIsTTimesThePattern) {
+    const fs::path plain = dir / "plain";
+    ASSERT_EQ(ltmsim(render(scene, plain, "--threads 2"), dir).status, 0);
+    const ltm::CsrMatrix T = ltm::read_ltm_npz((plain / "ltm.npz").string());
+    ASSERT_EQ(T.rows, kM * kN);
+    ASSERT_EQ(T.cols, kP * kQ);
+
+    struct Pattern {
+        std::string name;
+        std::vector<std::uint8_t> codes;
+    };
+    std::vector<Pattern> patterns(2);
+    patterns[0].name = "all-on";
+    patterns[0].codes.assign(static_cast<size_t>(kP * kQ), 255);
+    patterns[1].name = "scrambled";
+    for (int p = 0; p < kP; ++p)
+        for (int q = 0; q < kQ; ++q) patterns[1].codes.push_back(static_cast<std::uint8_t>((37 * p + 101 * q + 13 * p * q) % 256));
+
+    const fs::path scene4 = write("scene4.yaml", scene_yaml(4));
+    for (const Pattern& pat : patterns) {
+        SCOPED_TRACE(pat.name);
+        const fs::path png = dir / (pat.name + ".png");
+        write_gray_png(png, kQ, kP, pat.codes);
+        std::vector<float> x;
+        for (std::uint8_t c : pat.codes) x.push_back(static_cast<float>(c) / 255.0f);
+        std::vector<double> tx(static_cast<size_t>(T.rows)), s(static_cast<size_t>(T.rows));
+        T.multiply(x.data(), tx.data());
+        for (std::int64_t k = 0; k < T.rows; ++k)
+            for (auto i = T.indptr[static_cast<size_t>(k)]; i < T.indptr[static_cast<size_t>(k) + 1]; ++i)
+                s[static_cast<size_t>(k)] += std::fabs(T.data[static_cast<size_t>(i)] * x[static_cast<size_t>(T.indices[static_cast<size_t>(i)])]);
+
+        // 1. The same seed.
+        const fs::path same = dir / (pat.name + "-same");
+        const Outcome r = ltmsim(render(scene, same, "--threads 2 --pattern '" + png.string() + "'"), dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+        expect_outputs(same, {"image.exr", "image.png", "run.json"}, {"ltm.npz"});
+        const ltm::Image preview = ltm::read_image((same / "image.png").string());
+        EXPECT_EQ(preview.width, kN);
+        EXPECT_EQ(preview.height, kM);
+        const PatternImage y3 = read_pattern_image(same / "image.exr");
+        ASSERT_EQ(y3.y.size(), tx.size());
+        int lit = 0;
+        for (size_t k = 0; k < tx.size(); ++k) {
+            EXPECT_NEAR(y3.y[k], tx[k], ltm::tol::pattern_identity(s[k], std::fabs(y3.y[k])))
+                << "camera pixel " << k << " (row " << k / kN << ", column " << k % kN << ")";
+            lit += tx[k] > 0;
+        }
+        EXPECT_GT(lit, kN * kM / 2);
+
+        // 2. An independent seed: the sum over all pixels.
+        const fs::path other = dir / (pat.name + "-seed4");
+        const Outcome r4 = ltmsim(render(scene4, other, "--threads 2 --pattern '" + png.string() + "'"), dir);
+        ASSERT_EQ(r4.status, 0) << r4.err;
+        const PatternImage y4 = read_pattern_image(other / "image.exr");
+        ASSERT_EQ(y4.y.size(), tx.size());
+        double diff = 0, var = 0;
+        for (size_t k = 0; k < tx.size(); ++k) {
+            diff += tx[k] - y4.y[k];
+            var += double(y3.se[k]) * y3.se[k] + double(y4.se[k]) * y4.se[k];
+        }
+        ASSERT_GT(var, 0);
+        const double z = diff / std::sqrt(var);
+        EXPECT_LT(std::fabs(z), ltm::tol::normal_two_sided_quantile(ltm::tol::kFamilyAlpha))
+            << "sum of T x - y over all pixels " << diff << ", standard error " << std::sqrt(var);
+        ::testing::Test::RecordProperty(pat.name + "_z", std::to_string(z));
+    }
+}
+
+// ---- bad input: exit 2, one message naming the file, nothing written ----
+
+TEST_F(RenderCommand, PatternOfTheWrongSize) {
+    const fs::path png = dir / "small.png";
+    write_gray_png(png, 10, 10, std::vector<std::uint8_t>(100, 255));
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(scene, out, "--pattern '" + png.string() + "'"), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(png.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("10 x 10"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("40 x 40"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("display.resolution"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, PatternThatDoesNotExist) {
+    const fs::path png = dir / "nope.png";
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(scene, out, "--pattern '" + png.string() + "'"), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(png.string()), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, UnreadableOrMalformedScene) {
+    const fs::path out = dir / "out";
+    const fs::path missing = dir / "nope.yaml";
+    Outcome r = ltmsim(render(missing, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(missing.string() + ": cannot read scene file"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+
+    r = ltmsim(render(dir, out), dir);  // a folder is not a scene file
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(dir.string()), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+
+    const fs::path malformed = write("malformed.yaml", "object: [1, 2\n");
+    r = ltmsim(render(malformed, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(malformed.string() + ":"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("malformed YAML"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, SceneWithAnUnknownKey) {
+    const fs::path bad = write("typo.yaml",
+                               "object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}\n"
+                               "camera:\n"
+                               "  resolution: [20, 20]\n"
+                               "  size: [26.0, 26.0]\n"
+                               "  numerical_aperture: 0.05\n"
+                               "  samples_per_pixle: 16\n"
+                               "display: {resolution: [40, 40], size: [80.0, 80.0], z: 60.0}\n"
+                               "seed: 3\n");
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(bad, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(bad.string() + ":6:3: camera.samples_per_pixle: unknown key"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, SceneWithAWrongType) {
+    std::string text = scene_yaml(3);
+    text.replace(text.find("samples_per_pixel: 16"), 21, "samples_per_pixel: many");
+    const fs::path bad = write("type.yaml", text);
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(bad, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(bad.string() + ":5:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("camera.samples_per_pixel"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, OutputFolderWhoseParentDoesNotExist) {
+    const fs::path out = dir / "missing" / "out";
+    const Outcome r = ltmsim(render(scene, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(out.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "missing"));
+}
+
+TEST_F(RenderCommand, OutputThatIsAFile) {
+    const fs::path out = write("out", "the user's own file");
+    const Outcome r = ltmsim(render(scene, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(out.string()), std::string::npos) << r.err;
+    EXPECT_EQ(slurp(out), "the user's own file");
+}
+
+TEST_F(RenderCommand, AnalyticRepresentationOfAPitIsRefused) {
+    // scenes/examples/pit.yaml: a surface-breaking bubble cuts the front face; the analytic
+    // representation only handles defects that neither touch a face nor each other.
+    const std::string pit = std::string(LTM_SOURCE_DIR) + "/scenes/examples/pit.yaml";
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(pit, out, "--representation analytic"), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(pit), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("analytic representation"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("defect 0"), std::string::npos) << r.err;  // the reason names the defect
+    EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, UsageErrorsExitTwo) {
+    const fs::path out = dir / "out";
+    EXPECT_EQ(ltmsim(render(scene, out, "--representation exact"), dir).status, 2);
+    EXPECT_EQ(ltmsim(render(scene, out, "--threads -1"), dir).status, 2);
+    EXPECT_EQ(ltmsim("render '" + scene.string() + "'", dir).status, 2);  // no -o
+    EXPECT_FALSE(fs::exists(out));
+}
