@@ -2,6 +2,7 @@
 // Subcommands of the ltmsim executable. Each registers itself on the CLI11 app; the one that
 // runs stores its exit status: 0 success, 2 bad input (nothing written), 1 internal error.
 #include <CLI/CLI.hpp>
+#include <functional>
 #include <string>
 
 namespace ltm::app {
@@ -17,6 +18,10 @@ void add_experiment_command(CLI::App& app);
 
 int exit_status();
 void set_exit_status(int status);
+
+// Runs a subcommand: its status becomes the exit status; an exception that escapes is an
+// internal error (status 1) reported as "ltmsim NAME: what".
+void run_guarded(const std::string& name, const std::function<int()>& body);
 
 // Writes `text` to `path` atomically (temporary file in the same folder, then rename); throws
 // std::runtime_error naming the path on failure, leaving nothing behind.

@@ -1,6 +1,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <stdexcept>
 #include <unistd.h>
 
@@ -14,6 +15,15 @@ int g_status = 0;
 
 int exit_status() { return g_status; }
 void set_exit_status(int status) { g_status = status; }
+
+void run_guarded(const std::string& name, const std::function<int()>& body) {
+    try {
+        set_exit_status(body());
+    } catch (const std::exception& e) {
+        std::cerr << "ltmsim " << name << ": " << e.what() << "\n";
+        set_exit_status(1);
+    }
+}
 
 void write_text_atomically(const std::string& path, const std::string& text) {
     namespace fs = std::filesystem;

@@ -100,33 +100,11 @@ Rendered render_scene(const std::string& file, const std::string& label, const s
     RenderOptions ro;
     ro.threads = threads;
     const RenderResult res = render(tracer, ro);
-    std::vector<float> reference;
-    const RenderGeometry g{scene.camera.resolution[0], scene.camera.resolution[1],
-                           {scene.display.resolution[0], scene.display.resolution[1], scene.display.size[0], scene.display.size[1]}};
-    {
-        // The defect-free object's mean display positions (for a defect-free scene: its own).
-        RenderResult free_render;
-        if (!scene.defects.empty()) {
-            Scene free = scene;
-            free.defects.clear();
-            const Solid free_solid = build_solid(Lens(free.object.lens), {}, free.mesh);
-            TracerOptions fo;
-            fo.representation = Representation::Analytic;
-            free_render = render(Tracer(free, free_solid, fo), ro);
-        }
-        FeatureOptions means_only;
-        means_only.dark_block = 0;  // only MeanX and MeanY are used
-        const FeatureImages m = compute_features(scene.defects.empty() ? res.T : free_render.T, g.camera_columns,
-                                                 g.camera_rows, g.display, means_only, nullptr);
-        for (size_t k = 0; k < m.channel("MeanX").size(); ++k) {
-            reference.push_back(m.channel("MeanX")[k]);
-            reference.push_back(m.channel("MeanY")[k]);
-        }
-    }
+    const std::vector<float> reference = defect_free_reference(scene, res.T, topt.representation, ro);
     const fs::path dir = fs::path(out) / r.stem;
     fs::create_directories(dir);
     write_ltm_npz((dir / "ltm.npz").string(), res.T);
-    r.features = write_features(dir.string(), res.T, g, FeatureOptions{0.0, 0.99, -1}, reference.empty() ? nullptr : &reference);
+    r.features = write_features(dir.string(), res.T, render_geometry(scene), FeatureOptions{0.0, 0.99, -1}, &reference);
     r.loaded = std::move(*loaded);
     return r;
 }
@@ -311,14 +289,7 @@ void add_experiment_command(CLI::App& app) {
     cmd->add_option("-o,--output", args->out, "Output folder")->required();
     cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
     cmd->add_flag("--overwrite", args->overwrite, "Replace earlier results in the output folder");
-    cmd->callback([args] {
-        try {
-            set_exit_status(run(*args));
-        } catch (const std::exception& e) {
-            std::cerr << "ltmsim experiment: " << e.what() << "\n";
-            set_exit_status(1);
-        }
-    });
+    cmd->callback([args] { run_guarded("experiment", [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

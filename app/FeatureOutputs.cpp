@@ -32,6 +32,37 @@ double number_at(const JsonValue& v, size_t i, const std::string& file, const st
 
 }  // namespace
 
+RenderGeometry render_geometry(const Scene& s) {
+    return {s.camera.resolution[0], s.camera.resolution[1],
+            {s.display.resolution[0], s.display.resolution[1], s.display.size[0], s.display.size[1]}};
+}
+
+std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& own_T, Representation representation,
+                                         const RenderOptions& options) {
+    CsrMatrix free_T;
+    if (!scene.defects.empty()) {
+        Scene free = scene;
+        free.defects.clear();
+        const Solid free_solid = build_solid(Lens(free.object.lens), {}, free.mesh);
+        TracerOptions o;
+        o.representation = representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
+        free_T = render(Tracer(free, free_solid, o), options).T;
+    }
+    const RenderGeometry g = render_geometry(scene);
+    FeatureOptions means_only;
+    means_only.dark_block = 0;  // only MeanX and MeanY are used
+    const FeatureImages m = compute_features(scene.defects.empty() ? own_T : free_T, g.camera_columns, g.camera_rows,
+                                             g.display, means_only, nullptr);
+    const auto& mx = m.channel("MeanX");
+    const auto& my = m.channel("MeanY");
+    std::vector<float> ref(2 * mx.size());
+    for (size_t k = 0; k < mx.size(); ++k) {
+        ref[2 * k] = mx[k];
+        ref[2 * k + 1] = my[k];
+    }
+    return ref;
+}
+
 RenderGeometry read_render_geometry(const std::string& dir) {
     const std::string file = (fs::path(dir) / "run.json").string();
     std::ifstream in(file);

@@ -7,7 +7,9 @@
 #include <vector>
 
 #include "features/Features.h"
+#include "scene/Scene.h"
 #include "trace/CsrMatrix.h"
+#include "trace/Render.h"
 
 namespace ltm::app {
 
@@ -16,6 +18,16 @@ struct RenderGeometry {
     int camera_columns = 0, camera_rows = 0;
     DisplayGrid display;
 };
+
+RenderGeometry render_geometry(const Scene& scene);
+
+// The reference the deflection map is measured against: the mean display position (x, y in mm,
+// two floats per camera pixel) of the defect-free object. For a scene with defects it is the
+// scene without them, rendered with the same random numbers (`options`), so wherever no path of a
+// pixel touches a defect both renders trace the same paths; a defect-free scene is its own
+// reference (`own_T`, its deflection map is zero by definition).
+std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& own_T, Representation representation,
+                                         const RenderOptions& options);
 
 // Reads the camera and display from DIR/run.json; throws std::runtime_error naming the file.
 RenderGeometry read_render_geometry(const std::string& dir);

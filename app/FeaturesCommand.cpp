@@ -86,14 +86,7 @@ void add_features_command(CLI::App& app) {
     cmd->add_option("--dark-block", args->options.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
     cmd->add_option("--pattern", args->pattern, "Also write pattern.exr: the camera image y = T x for this display pattern");
     cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
-    cmd->callback([args] {
-        try {
-            set_exit_status(run(*args));
-        } catch (const std::exception& e) {
-            std::cerr << "ltmsim features: " << e.what() << "\n";
-            set_exit_status(1);
-        }
-    });
+    cmd->callback([args] { run_guarded("features", [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

@@ -4,9 +4,9 @@
 #include <iostream>
 
 #include "app/Commands.h"
+#include "app/SceneSetup.h"
 #include "defects/SolidBuilder.h"
 #include "geometry/MeshExport.h"
-#include "scene/SceneLoader.h"
 
 namespace ltm::app {
 
@@ -47,22 +47,11 @@ int run(const MeshArgs& a) {
         }
     }
     StageReport report;
-    Scene scene;
-    try {
-        StageTimer t(&report, "parse");
-        scene = load_scene(a.scene);
-        t.done(fmt::format("{} defect(s)", scene.defects.size()));
-    } catch (const SceneError& e) {
-        std::cerr << e.what() << "\n";
-        return 2;
-    }
-    Solid solid;
-    try {
-        solid = build_solid(Lens(scene.object.lens), scene.defects, scene.mesh, &report);
-    } catch (const std::invalid_argument& e) {
-        std::cerr << fmt::format("{}: {}\n", scene.source, e.what());
-        return 2;
-    }
+    int status = 0;
+    auto loaded = load_scene_and_solid(a.scene, report, status);
+    if (!loaded) return status;
+    const Scene& scene = loaded->scene;
+    const Solid& solid = loaded->solid;
     {
         StageTimer t(&report, "write");
         write_mesh(a.output, solid.mesh, solid.surfaces, format);
@@ -88,14 +77,7 @@ void add_mesh_command(CLI::App& app) {
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
     cmd->add_option("--threads", args->threads, "Threads (meshing is sequential; accepted for uniformity)")
         ->check(CLI::NonNegativeNumber);
-    cmd->callback([args] {
-        try {
-            set_exit_status(run(*args));
-        } catch (const std::exception& e) {
-            std::cerr << "ltmsim mesh: " << e.what() << "\n";
-            set_exit_status(1);
-        }
-    });
+    cmd->callback([args] { run_guarded("mesh", [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

@@ -109,34 +109,10 @@ int run(const RenderArgs& a) {
     // For a scene with defects, the defect-free object rendered with the same random numbers:
     // away from the defects its paths are the very same, so the deflection map (mean display
     // position minus the reference's) is exactly zero there, free of sampling noise.
-    // A defect-free scene is its own reference (its deflection map is zero by definition).
     std::vector<float> reference;
     if (pattern.empty()) {
         StageTimer t_ref(&report, "reference");
-        RenderResult free_render;
-        if (!scene.defects.empty()) {
-            Scene free = scene;
-            free.defects.clear();
-            const Solid free_solid = build_solid(Lens(free.object.lens), {}, free.mesh);
-            TracerOptions fopt = topt;
-            fopt.representation =
-                topt.representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
-            free_render = render(Tracer(free, free_solid, fopt), ropt);
-        }
-        const RenderResult& rr = scene.defects.empty() ? r : free_render;
-        FeatureOptions means_only;
-        means_only.dark_block = 0;  // only MeanX and MeanY are used
-        const FeatureImages mean = compute_features(rr.T, scene.camera.resolution[0], scene.camera.resolution[1],
-                                                    {scene.display.resolution[0], scene.display.resolution[1],
-                                                     scene.display.size[0], scene.display.size[1]},
-                                                    means_only, nullptr);
-        const auto& mx = mean.channel("MeanX");
-        const auto& my = mean.channel("MeanY");
-        reference.resize(2 * mx.size());
-        for (size_t k = 0; k < mx.size(); ++k) {
-            reference[2 * k] = mx[k];
-            reference[2 * k + 1] = my[k];
-        }
+        reference = defect_free_reference(scene, r.T, topt.representation, ropt);
         t_ref.done(scene.defects.empty() ? "the scene itself (defect-free)" : "defect-free object, common random numbers");
     }
 
@@ -161,10 +137,7 @@ int run(const RenderArgs& a) {
                           {{"MeanX", mx}, {"MeanY", my}});
                 written.push_back(dir / "reference.exr");
             }
-            RenderGeometry g{scene.camera.resolution[0], scene.camera.resolution[1],
-                             {scene.display.resolution[0], scene.display.resolution[1], scene.display.size[0],
-                              scene.display.size[1]}};
-            write_features(a.dir, r.T, g, a.features, reference.empty() ? nullptr : &reference);
+            write_features(a.dir, r.T, render_geometry(scene), a.features, &reference);
             written.push_back(dir / "features.exr");
         } else {
             const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
@@ -216,14 +189,7 @@ void add_render_command(CLI::App& app) {
     cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
-    cmd->callback([args] {
-        try {
-            set_exit_status(run(*args));
-        } catch (const std::exception& e) {
-            std::cerr << "ltmsim render: " << e.what() << "\n";
-            set_exit_status(1);
-        }
-    });
+    cmd->callback([args] { run_guarded("render", [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

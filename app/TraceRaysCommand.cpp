@@ -129,14 +129,7 @@ void add_trace_rays_command(CLI::App& app) {
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--representation", args->representation, "auto | refined | analytic | mesh-only")
         ->check(CLI::IsMember({"auto", "refined", "analytic", "mesh-only"}));
-    cmd->callback([args] {
-        try {
-            set_exit_status(run(*args));
-        } catch (const std::exception& e) {
-            std::cerr << "ltmsim trace-rays: " << e.what() << "\n";
-            set_exit_status(1);
-        }
-    });
+    cmd->callback([args] { run_guarded("trace-rays", [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

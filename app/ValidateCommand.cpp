@@ -49,14 +49,7 @@ void add_validate_command(CLI::App& app) {
         ->check(CLI::IsMember({"refined", "analytic"}));
     cmd->add_option("--threads", args->threads, "Threads (accepted for uniformity; rays are traced in order)")
         ->check(CLI::NonNegativeNumber);
-    cmd->callback([args] {
-        try {
-            set_exit_status(run(*args));
-        } catch (const std::exception& e) {
-            std::cerr << "ltmsim validate: " << e.what() << "\n";
-            set_exit_status(1);
-        }
-    });
+    cmd->callback([args] { run_guarded("validate", [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app
