@@ -101,10 +101,8 @@ Rendered render_scene(const std::string& file, const std::string& label, const s
     ro.threads = threads;
     const RenderResult res = render(tracer, ro);
     const std::vector<float> reference = defect_free_reference(scene, res.T, topt.representation, ro);
-    const fs::path dir = fs::path(out) / r.stem;
-    fs::create_directories(dir);
-    write_ltm_npz((dir / "ltm.npz").string(), res.T);
-    r.features = write_features(dir.string(), res.T, render_geometry(scene), FeatureOptions{0.0, 0.99, -1}, &reference);
+    r.features = write_render_folder((fs::path(out) / r.stem).string(), scene, res, topt.representation, threads,
+                                     FeatureOptions{0.0, 0.99, -1}, reference, report);
     r.loaded = std::move(*loaded);
     return r;
 }

@@ -10,6 +10,9 @@
 #include "app/JsonLine.h"
 #include "features/Image.h"
 #include "features/Plot.h"
+#include "app/Commands.h"
+#include "scene/SceneJson.h"
+#include "trace/LtmFile.h"
 
 namespace ltm::app {
 
@@ -31,6 +34,66 @@ double number_at(const JsonValue& v, size_t i, const std::string& file, const st
 }
 
 }  // namespace
+
+namespace {
+
+std::string stats_json(const PathStats& s) {
+    return fmt::format(
+        "{{\"paths\": {}, \"segments\": {}, \"segments_per_path\": {}, \"reflections\": {}, \"transmissions\": {}, "
+        "\"total_internal_reflections\": {}, \"absorbed_by_particles\": {}, \"absorbed_by_rim\": {}, "
+        "\"on_display\": {}, \"off_display\": {}, \"toward_camera\": {}, \"roulette_kills\": {}, \"truncated\": {}, "
+        "\"nan_events\": {}, \"spurious_candidates\": {}, \"guard_hits\": {}, \"leak_retries\": {}, "
+        "\"leaks_unresolved\": {}, \"display_weight\": {}, \"lost_weight\": {}, \"absorbed_weight\": {}}}",
+        s.paths, s.segments, json_number(s.paths ? double(s.segments) / double(s.paths) : 0.0), s.reflections,
+        s.transmissions, s.tir, s.absorbed_particle, s.absorbed_rim, s.on_display, s.off_display, s.toward_camera,
+        s.roulette_kills, s.truncated, s.nan_events, s.spurious_candidates, s.guard_hits, s.leak_retries,
+        s.leaks_unresolved, json_number(s.display_weight), json_number(s.lost_weight), json_number(s.absorbed_weight));
+}
+
+}  // namespace
+
+void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
+                    int threads, const std::string& result, const StageReport& report) {
+    const std::string run_json = fmt::format(
+        "{{\n  \"ltmsim_version\": \"{}\",\n  \"scene\": {},\n  \"seed\": {},\n  \"representation\": \"{}\",\n"
+        "  \"threads\": {},\n  \"result\": {},\n  \"render_seconds\": {},\n  \"stages\": {},\n  \"path_statistics\": {}\n}}\n",
+        kVersion, scene_to_json(scene, 2), scene.seed, to_string(representation), threads, result, json_number(r.seconds),
+        report.to_json(), stats_json(r.stats));
+    write_text_atomically((fs::path(dir) / "run.json").string(), run_json);
+}
+
+FeatureImages write_render_folder(const std::string& dir, const Scene& scene, const RenderResult& r,
+                                  Representation representation, int threads, const FeatureOptions& options,
+                                  const std::vector<float>& reference, StageReport& report) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    const fs::path d(dir);
+    std::vector<fs::path> written;
+    try {
+        StageTimer t_write(&report, "write");
+        write_ltm_npz((d / "ltm.npz").string(), r.T);
+        written.push_back(d / "ltm.npz");
+        if (!scene.defects.empty()) {
+            std::vector<float> mx(reference.size() / 2), my(reference.size() / 2);
+            for (size_t k = 0; k < mx.size(); ++k) {
+                mx[k] = reference[2 * k];
+                my[k] = reference[2 * k + 1];
+            }
+            write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
+                      {{"MeanX", mx}, {"MeanY", my}});
+            written.push_back(d / "reference.exr");
+        }
+        written.push_back(d / "features.exr");
+        FeatureImages f = write_features(dir, r.T, render_geometry(scene), options, reference.empty() ? nullptr : &reference);
+        t_write.done(dir);
+        write_run_json(dir, scene, r, representation, threads,
+                       fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}}}", r.T.rows, r.T.cols, r.T.nnz()), report);
+        return f;
+    } catch (...) {
+        for (const auto& p : written) fs::remove(p, ec);
+        throw;
+    }
+}
 
 RenderGeometry render_geometry(const Scene& s) {
     return {s.camera.resolution[0], s.camera.resolution[1],

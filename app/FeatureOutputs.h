@@ -9,6 +9,7 @@
 #include "features/Features.h"
 #include "scene/Scene.h"
 #include "trace/CsrMatrix.h"
+#include "geometry/StageReport.h"
 #include "trace/Render.h"
 
 namespace ltm::app {
@@ -28,6 +29,18 @@ RenderGeometry render_geometry(const Scene& scene);
 // reference (`own_T`, its deflection map is zero by definition).
 std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& own_T, Representation representation,
                                          const RenderOptions& options);
+
+// DIR/run.json: the resolved scene, seed, version, representation, timings and path statistics;
+// `result` is a JSON object describing what was rendered.
+void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
+                    int threads, const std::string& result, const StageReport& report);
+
+// A render folder: DIR/ltm.npz, DIR/reference.exr (for a scene with defects), DIR/features.exr
+// with DIR/features/*.png, and DIR/run.json (written last). On failure the files this call wrote
+// are removed and the exception rethrown. Returns the feature images.
+FeatureImages write_render_folder(const std::string& dir, const Scene& scene, const RenderResult& r,
+                                  Representation representation, int threads, const FeatureOptions& options,
+                                  const std::vector<float>& reference, StageReport& report);
 
 // Reads the camera and display from DIR/run.json; throws std::runtime_error naming the file.
 RenderGeometry read_render_geometry(const std::string& dir);

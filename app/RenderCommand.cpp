@@ -25,19 +25,6 @@ struct RenderArgs {
     FeatureOptions features{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
 };
 
-std::string stats_json(const PathStats& s) {
-    return fmt::format(
-        "{{\"paths\": {}, \"segments\": {}, \"segments_per_path\": {}, \"reflections\": {}, \"transmissions\": {}, "
-        "\"total_internal_reflections\": {}, \"absorbed_by_particles\": {}, \"absorbed_by_rim\": {}, "
-        "\"on_display\": {}, \"off_display\": {}, \"toward_camera\": {}, \"roulette_kills\": {}, \"truncated\": {}, "
-        "\"nan_events\": {}, \"spurious_candidates\": {}, \"guard_hits\": {}, \"leak_retries\": {}, "
-        "\"leaks_unresolved\": {}, \"display_weight\": {}, \"lost_weight\": {}, \"absorbed_weight\": {}}}",
-        s.paths, s.segments, json_number(s.paths ? double(s.segments) / double(s.paths) : 0.0), s.reflections,
-        s.transmissions, s.tir, s.absorbed_particle, s.absorbed_rim, s.on_display, s.off_display, s.toward_camera,
-        s.roulette_kills, s.truncated, s.nan_events, s.spurious_candidates, s.guard_hits, s.leak_retries,
-        s.leaks_unresolved, json_number(s.display_weight), json_number(s.lost_weight), json_number(s.absorbed_weight));
-}
-
 int run(const RenderArgs& a) {
     if (!output_folder_ok("render", a.dir)) return 2;
     std::vector<std::string> outputs = a.pattern.empty() ? std::vector<std::string>{"ltm.npz", "run.json", "features.exr"}
@@ -116,54 +103,37 @@ int run(const RenderArgs& a) {
         t_ref.done(scene.defects.empty() ? "the scene itself (defect-free)" : "defect-free object, common random numbers");
     }
 
-    std::error_code ec;
-    fs::create_directories(a.dir, ec);
-    std::vector<fs::path> written;
     try {
-        StageTimer t_write(&report, "write");
-        const fs::path dir(a.dir);
-        std::string result_json;
         if (pattern.empty()) {
-            write_ltm_npz((dir / "ltm.npz").string(), r.T);
-            written.push_back(dir / "ltm.npz");
-            result_json = fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}}}", r.T.rows, r.T.cols, r.T.nnz());
-            if (!reference.empty()) {
-                std::vector<float> mx(reference.size() / 2), my(reference.size() / 2);
-                for (size_t k = 0; k < mx.size(); ++k) {
-                    mx[k] = reference[2 * k];
-                    my[k] = reference[2 * k + 1];
-                }
-                write_exr((dir / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
-                          {{"MeanX", mx}, {"MeanY", my}});
-                written.push_back(dir / "reference.exr");
-            }
-            write_features(a.dir, r.T, render_geometry(scene), a.features, &reference);
-            written.push_back(dir / "features.exr");
+            write_render_folder(a.dir, scene, r, topt.representation, a.threads, a.features, reference, report);
         } else {
+            std::error_code ec;
+            fs::create_directories(a.dir, ec);
+            const fs::path dir(a.dir);
             const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
             std::vector<float> y(r.image.begin(), r.image.end()), se(r.image_stderr.begin(), r.image_stderr.end());
-            write_exr((dir / "image.exr").string(), N, M, {{"Image", y}, {"StdError", se}});
-            written.push_back(dir / "image.exr");
-            Image preview;
-            preview.width = N;
-            preview.height = M;
-            preview.channels = 1;
-            double peak = 0;
-            for (double v : r.image) peak = std::max(peak, v);
-            for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
-            write_png((dir / "image.png").string(), preview);
-            written.push_back(dir / "image.png");
-            result_json = fmt::format("{{\"pattern\": {}, \"image\": \"image.exr\"}}", json_string(a.pattern));
+            std::vector<fs::path> written;
+            try {
+                write_exr((dir / "image.exr").string(), N, M, {{"Image", y}, {"StdError", se}});
+                written.push_back(dir / "image.exr");
+                Image preview;
+                preview.width = N;
+                preview.height = M;
+                preview.channels = 1;
+                double peak = 0;
+                for (double v : r.image) peak = std::max(peak, v);
+                for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
+                write_png((dir / "image.png").string(), preview);
+                written.push_back(dir / "image.png");
+                write_run_json(a.dir, scene, r, topt.representation, a.threads,
+                               fmt::format("{{\"pattern\": {}, \"image\": \"image.exr\"}}", json_string(a.pattern)),
+                               report);
+            } catch (...) {
+                for (const auto& p : written) fs::remove(p, ec);
+                throw;
+            }
         }
-        t_write.done(a.dir);
-        const std::string run_json = fmt::format(
-            "{{\n  \"ltmsim_version\": \"{}\",\n  \"scene\": {},\n  \"seed\": {},\n  \"representation\": \"{}\",\n"
-            "  \"threads\": {},\n  \"result\": {},\n  \"render_seconds\": {},\n  \"stages\": {},\n  \"path_statistics\": {}\n}}\n",
-            kVersion, scene_to_json(scene, 2), scene.seed, to_string(topt.representation), a.threads, result_json,
-            json_number(r.seconds), report.to_json(), stats_json(r.stats));
-        write_text_atomically((dir / "run.json").string(), run_json);
     } catch (const std::exception& e) {
-        for (const auto& p : written) fs::remove(p, ec);
         std::cerr << "ltmsim render: " << e.what() << "\n";
         return 1;
     }
