@@ -9,10 +9,9 @@
 #include <fstream>
 #include <map>
 #include <sstream>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "features/Image.h"
+#include "tests/TestSupport.h"
 
 namespace fs = std::filesystem;
 
@@ -35,12 +34,13 @@ std::vector<std::string> split(const std::string& s, char c) {
 }  // namespace
 
 TEST(PaperExperiment, ScatterFeaturesBeatTheBrightFieldOnTheSmallestBubbles) {
-    const fs::path out = fs::temp_directory_path() / ("ltmsim-paper-" + std::to_string(::getpid()));
-    fs::remove_all(out);
+    // A fresh folder for the output folder (made by the command) and the command's log (stdout
+    // and stderr together), both kept when the test fails.
+    const fs::path work = ltm::test::make_test_dir();
+    const fs::path out = work / "out";
     const std::string cmd = std::string(LTMSIM_EXE) + " experiment " + LTM_SOURCE_DIR + "/scenes/paper -o " + out.string() +
-                            " > " + (out.string() + ".log") + " 2>&1";
-    const int raw = std::system(cmd.c_str());
-    ASSERT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 0) << cmd;
+                            " > " + (work / "experiment.log").string() + " 2>&1";
+    ASSERT_EQ(ltm::test::exit_status(std::system(cmd.c_str())), 0) << cmd;
     ASSERT_TRUE(fs::exists(out / "contrast.md"));
     const ltm::Image montage = ltm::read_image((out / "montage.png").string());
     EXPECT_GT(montage.width, 800);
@@ -74,6 +74,5 @@ TEST(PaperExperiment, ScatterFeaturesBeatTheBrightFieldOnTheSmallestBubbles) {
     // The paper's "white dots" are rare far-off paths: the energy-robust diameter discards them.
     EXPECT_LT(false_positives["RobustScatterDiameter"], false_positives["ScatterDiameter"] / 10);
     EXPECT_LE(false_positives["RobustScatterCount"], false_positives["ScatterCount"]);
-    fs::remove_all(out);
-    fs::remove(out.string() + ".log");
+    fs::remove_all(work);
 }

@@ -7,41 +7,26 @@
 #include <fstream>
 #include <map>
 #include <sstream>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "features/Image.h"
+#include "tests/TestSupport.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-int run(const std::string& args, std::string* err = nullptr) {
-    const std::string e = (fs::temp_directory_path() / ("ltmsim-feat-err-" + std::to_string(::getpid()))).string();
-    const int raw = std::system((std::string(LTMSIM_EXE) + " " + args + " > /dev/null 2> " + e).c_str());
-    if (err) {
-        std::ifstream in(e);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        *err = ss.str();
-    }
-    fs::remove(e);
-    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-}
+using ltm::test::slurp;
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-class FeaturesCommand : public ::testing::Test {
+class FeaturesCommand : public ltm::test::TempDirTest {
 protected:
+    // Runs `ltmsim <args>` and returns its exit status; stderr into *err if given, stdout dropped.
+    int run(const std::string& args, std::string* err = nullptr) {
+        const ltm::test::Outcome r = ltm::test::ltmsim(args, dir, ltm::test::Capture::StderrOnly);
+        if (err) *err = r.err;
+        return r.status;
+    }
     void SetUp() override {
-        dir = fs::temp_directory_path() / ("ltmsim-features-" + std::to_string(::getpid()));
-        fs::remove_all(dir);
-        fs::create_directories(dir);
+        TempDirTest::SetUp();
         std::ofstream(dir / "scene.yaml") << R"(
 object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
 defects:
@@ -51,8 +36,6 @@ display: {resolution: [50, 40], size: [100.0, 80.0], z: 60.0}
 )";
         ASSERT_EQ(run("render " + (dir / "scene.yaml").string() + " -o " + (dir / "r").string()), 0);
     }
-    void TearDown() override { fs::remove_all(dir); }
-    fs::path dir;
 };
 
 }  // namespace

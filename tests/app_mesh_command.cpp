@@ -4,59 +4,28 @@
 
 #include <array>
 #include <set>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "geometry/MeshExport.h"
+#include "tests/TestSupport.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-    int status = -1;
-    std::string err;
-};
+using ltm::test::Capture;
+using ltm::test::Outcome;
+using ltm::test::slurp;
 
-// Runs ltmsim with `args`, capturing stderr.
-Outcome ltmsim(const std::string& args, const fs::path& dir) {
-    const fs::path err = dir / "stderr.txt";
-    const std::string cmd = std::string(LTMSIM_EXE) + " " + args + " 2> " + err.string() + " > /dev/null";
-    Outcome r;
-    const int raw = std::system(cmd.c_str());
-    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    std::ifstream in(err);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    r.err = ss.str();
-    return r;
-}
+// Runs ltmsim with `args`, capturing stderr (stdout goes to /dev/null).
+Outcome ltmsim(const std::string& args, const fs::path& dir) { return ltm::test::ltmsim(args, dir, Capture::StderrOnly); }
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-class MeshCommand : public ::testing::Test {
+class MeshCommand : public ltm::test::TempDirTest {
 protected:
-    void SetUp() override {
-        dir = fs::temp_directory_path() / ("ltmsim-app-" + std::to_string(::getpid()) + "-" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir);
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
     std::string scene(const std::string& rel) { return std::string(LTM_SOURCE_DIR) + "/scenes/" + rel; }
-    fs::path write(const std::string& name, const std::string& text) {
-        std::ofstream(dir / name) << text;
-        return dir / name;
-    }
     // Everything in dir except the files the test made itself.
     std::vector<std::string> outputs() {
         std::vector<std::string> names;
@@ -66,7 +35,6 @@ protected:
         }
         return names;
     }
-    fs::path dir;
 };
 
 }  // namespace

@@ -8,9 +8,6 @@
 // render takes a few milliseconds, so the test runs the real executable many times.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -23,6 +20,7 @@
 #include <vector>
 
 #include "features/Image.h"
+#include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
 #include "trace/LtmFile.h"
 
@@ -46,32 +44,11 @@ std::string scene_yaml(int seed) {
 }
 constexpr int kN = 20, kM = 20, kQ = 40, kP = 40, kSpp = 16;
 
-struct Outcome {
-    int status = -1;
-    std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-// Runs `command` through the shell, capturing stdout and stderr into files of `dir`.
-Outcome run_shell(const std::string& command, const fs::path& dir) {
-    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string cmd = command + " > '" + out.string() + "' 2> '" + err.string() + "'";
-    Outcome r;
-    const int raw = std::system(cmd.c_str());
-    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    fs::remove(out);
-    fs::remove(err);
-    return r;
-}
-Outcome ltmsim(const std::string& args, const fs::path& dir) { return run_shell(std::string(LTMSIM_EXE) + " " + args, dir); }
+// Commands run with stdout and stderr captured (tests/TestSupport.h).
+using ltm::test::ltmsim;
+using ltm::test::Outcome;
+using ltm::test::run_shell;
+using ltm::test::slurp;
 
 bool python_has_scipy(const fs::path& dir) {
     if (!fs::exists(kPython)) return false;
@@ -134,19 +111,11 @@ void write_gray_png(const fs::path& path, int width, int height, const std::vect
     out << std::string("\x89PNG\r\n\x1a\n", 8) << chunk("IHDR", ihdr) << chunk("IDAT", z) << chunk("IEND", "");
 }
 
-class RenderCommand : public ::testing::Test {
+class RenderCommand : public ltm::test::TempDirTest {
 protected:
     void SetUp() override {
-        dir = fs::temp_directory_path() / ("ltmsim-render-" + std::to_string(::getpid()) + "-" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir);
-        fs::create_directories(dir);
+        TempDirTest::SetUp();
         scene = write("scene.yaml", scene_yaml(3));
-    }
-    void TearDown() override { fs::remove_all(dir); }
-    fs::path write(const std::string& name, const std::string& text) {
-        std::ofstream(dir / name) << text;
-        return dir / name;
     }
     std::string render(const fs::path& scene_file, const fs::path& out, const std::string& extra = "") {
         return "render '" + scene_file.string() + "' -o '" + out.string() + "' " + extra;
@@ -171,7 +140,7 @@ protected:
         for (const auto& n : absent) EXPECT_FALSE(names.count(n)) << folder << " holds " << n;
         for (const auto& n : names) EXPECT_NE(n[0], '.') << folder << " holds a temporary " << n;
     }
-    fs::path dir, scene;
+    fs::path scene;
 };
 
 // Python checks of the two files, printing "OK" or the failures (one per line).

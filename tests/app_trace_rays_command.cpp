@@ -12,9 +12,6 @@
 // (scene/SceneJson.h, json_number) and read back with strtod, so printing adds no error.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -26,6 +23,7 @@
 #include <vector>
 
 #include "scene/SceneLoader.h"
+#include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
 #include "validation/AnalyticScene.h"
 #include "validation/ValidationTolerance.h"
@@ -211,23 +209,7 @@ TracedRay parse_line(const std::string& line) {
     return r;
 }
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-struct Outcome {
-    int status = -1;
-    std::string out, err;
-    std::vector<std::string> lines() const {
-        std::vector<std::string> v;
-        std::istringstream in(out);
-        for (std::string l; std::getline(in, l);) v.push_back(l);
-        return v;
-    }
-};
+using ltm::test::Outcome;
 
 // The display of every scene here: 500 x 500 pixels over 100 x 100 mm at z = 60 (the paper's).
 const char* kSetup =
@@ -244,31 +226,12 @@ const std::string kDefects =
                 "  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 1.0}\n") +
     kSetup;
 
-class TraceRaysCommand : public ::testing::Test {
+class TraceRaysCommand : public ltm::test::TempDirTest {
 protected:
-    void SetUp() override {
-        dir = fs::temp_directory_path() / ("ltmsim-trace-" + std::to_string(::getpid()) + "-" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir);
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
-    fs::path write(const std::string& name, const std::string& text) {
-        std::ofstream(dir / name, std::ios::binary) << text;
-        return dir / name;
-    }
+    // `ltmsim trace-rays`, capturing stdout and stderr.
     Outcome trace(const fs::path& scene, const fs::path& rays, const std::string& extra = "") {
-        const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-        const std::string cmd = std::string(LTMSIM_EXE) + " trace-rays '" + scene.string() + "' --rays '" + rays.string() +
-                                "' " + extra + " > '" + out.string() + "' 2> '" + err.string() + "'";
-        Outcome r;
-        const int raw = std::system(cmd.c_str());
-        r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
+        return ltm::test::ltmsim("trace-rays '" + scene.string() + "' --rays '" + rays.string() + "' " + extra, dir);
     }
-    fs::path dir;
 };
 
 // A traced ray against the analytic reference path of the same ray, with validate's tolerances.

@@ -6,51 +6,24 @@
 // reference does not model (a pit, a scratch) exits 2 with "no analytic reference".
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "tests/TestSupport.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
-    int status = -1;
-    std::string out, err;
-};
+using ltm::test::Outcome;
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-class ValidateCommand : public ::testing::Test {
+class ValidateCommand : public ltm::test::TempDirTest {
 protected:
-    void SetUp() override {
-        dir = fs::temp_directory_path() / ("ltmsim-validate-" + std::to_string(::getpid()) + "-" +
-                                           ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir);
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
-    Outcome validate(const std::string& scene) {
-        const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-        const std::string cmd = std::string(LTMSIM_EXE) + " validate '" + scene + "' > '" + out.string() + "' 2> '" +
-                                err.string() + "'";
-        Outcome r;
-        const int raw = std::system(cmd.c_str());
-        r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
-    }
+    // `ltmsim validate SCENE`, capturing stdout and stderr.
+    Outcome validate(const std::string& scene) { return ltm::test::ltmsim("validate '" + scene + "'", dir); }
     void expect_passes(const std::string& scene) {
         SCOPED_TRACE(scene);
         const Outcome r = validate(scene);
@@ -65,7 +38,6 @@ protected:
         EXPECT_NE(r.out.find("mesh-only", mesh), std::string::npos) << r.out;
     }
     static std::string source(const std::string& rel) { return std::string(LTM_SOURCE_DIR) + "/scenes/" + rel; }
-    fs::path dir;
 };
 
 // The default scene (the paper's lens with three bubbles) scaled by s: every length (radii,

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/TestSupport.h"
 #include "trace/CsrMatrix.h"
 #include "trace/LtmFile.h"
 
@@ -31,40 +32,12 @@ namespace {
 
 const char* kPython = "/usr/bin/python3";
 
-// A fresh folder per test, removed afterwards.
-class LtmFileTest : public ::testing::Test {
-protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::temp_directory_path() /
-               ("ltm_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-    std::vector<std::string> listing() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(dir_)) names.push_back(e.path().filename().string());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-    fs::path dir_;
-};
+// A fresh folder `dir` per test, removed afterwards (ignoring a failure to remove it).
+class LtmFileTest : public ltm::test::LenientTempDirTest {};
 
-std::string slurp(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream os;
-    os << in.rdbuf();
-    return os.str();
-}
-void spit(const std::string& p, const std::string& bytes) {
-    std::ofstream out(p, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+using ltm::test::message_of;
+using ltm::test::slurp;
+using ltm::test::spit;
 
 // Runs a Python script with /usr/bin/python3; returns its stdout (stderr goes to the test log).
 std::string run_python(const std::string& script_path, const std::string& script, int* status) {
@@ -162,15 +135,6 @@ CsrMatrix random_matrix(std::int64_t rows, std::int64_t cols, int max_per_row, u
         m.indptr.push_back(static_cast<std::int64_t>(m.indices.size()));
     }
     return m;
-}
-
-std::string message_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const std::runtime_error& e) {
-        return e.what();
-    }
-    return "(no exception)";
 }
 
 // Offset of the central directory header of entry `name` in a ZIP file's bytes.
@@ -405,7 +369,7 @@ TEST_F(LtmFileTest, ReadsFilesWrittenByScipy) {
     int status = 0;
     const std::string out = run_python(path("save.py"), R"(
 import numpy as np, scipy.sparse as sp
-d = ')" + dir_.string() + R"('
+d = ')" + dir.string() + R"('
 A = np.array([[0, 0.1, 0, 2.5], [0, 0, 0, 0], [-3, 0, 1e-3, 0]])
 T = sp.csr_matrix(A.astype(np.float32))
 sp.save_npz(d + '/c32.npz', T)                        # compressed (the default)
@@ -449,7 +413,7 @@ TEST_F(LtmFileTest, RejectsScipyFilesThatAreNotUsableCsr) {
     int status = 0;
     const std::string out = run_python(path("bad.py"), R"(
 import numpy as np, scipy.sparse as sp
-d = ')" + dir_.string() + R"('
+d = ')" + dir.string() + R"('
 A = np.array([[0, 1.0, 0], [2.0, 0, 3.0]], dtype=np.float32)
 sp.save_npz(d + '/csc.npz', sp.csc_matrix(A))
 U = sp.csr_matrix((np.array([1, 2], np.float32), np.array([2, 0], np.int32), np.array([0, 2])), shape=(1, 3))

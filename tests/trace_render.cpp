@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "scene/SceneLoader.h"
+#include "tests/SceneFixture.h"
 #include "trace/Render.h"
 
 using namespace ltm;
@@ -23,17 +24,8 @@ display: {resolution: [60, 60], size: [100.0, 100.0], z: 60.0}
 seed: 7
 )";
 
-struct Built {
-    Scene scene;
-    Solid solid;
-};
-
-Built build(const std::string& yaml) {
-    Built b;
-    b.scene = parse_scene(yaml, "test.yaml");
-    b.solid = build_solid(Lens(b.scene.object.lens), b.scene.defects, b.scene.mesh);
-    return b;
-}
+using test::Built;
+using test::build;
 
 bool identical(const CsrMatrix& a, const CsrMatrix& b) {
     return a.rows == b.rows && a.cols == b.cols && a.indptr == b.indptr && a.indices == b.indices &&

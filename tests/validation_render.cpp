@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "scene/SceneLoader.h"
+#include "tests/SceneFixture.h"
 #include "tests/Tolerances.h"
 #include "trace/Render.h"
 #include "validation/AnalyticScene.h"
@@ -25,16 +26,8 @@ display: {resolution: [40, 40], size: [80.0, 80.0], z: 60.0}
 seed: 3
 )";
 
-struct Built {
-    Scene scene;
-    Solid solid;
-};
-Built build(const std::string& yaml) {
-    Built b;
-    b.scene = parse_scene(yaml, "test.yaml");
-    b.solid = build_solid(Lens(b.scene.object.lens), b.scene.defects, b.scene.mesh);
-    return b;
-}
+using test::Built;
+using test::build;
 
 // Tests T x (from a T rendered with seed s) against y rendered directly with seed s + 1: two
 // independent estimates of the same mean, so Z = (Tx - y) / sqrt(se_T^2 + se_y^2). The direct

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "scene/SceneLoader.h"
+#include "tests/SceneFixture.h"
 #include "trace/Tracer.h"
 #include "validation/Validate.h"
 
@@ -14,16 +15,10 @@ using namespace ltm;
 
 namespace {
 
-struct Built {
-    Scene scene;
-    Solid solid;
-};
-Built build(const std::string& yaml) {
-    Built b;
-    b.scene = parse_scene(yaml, "thin.yaml");
-    b.solid = build_solid(Lens(b.scene.object.lens), b.scene.defects, b.scene.mesh);
-    return b;
-}
+using test::Built;
+
+// A scene and its solid (tests/SceneFixture.h), messages naming "thin.yaml".
+Built build(const std::string& yaml) { return test::build(yaml, "thin.yaml"); }
 
 void expect_validates(const Built& b, const std::string& what) {
     for (auto rep : {Representation::Refined, Representation::Analytic}) {
