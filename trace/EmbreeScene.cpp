@@ -67,6 +67,25 @@ void patch_intersect(const RTCIntersectFunctionNArguments* args) {
     rh->hit.Ng_z = 1;
 }
 
+// An Embree ray from the double ray, over [tnear, tfar] (floats), with no hit yet.
+RTCRayHit make_rayhit(const Vec3& o, const Vec3& d, float tnear, float tfar) {
+    RTCRayHit rh;
+    rh.ray.org_x = static_cast<float>(o.x);
+    rh.ray.org_y = static_cast<float>(o.y);
+    rh.ray.org_z = static_cast<float>(o.z);
+    rh.ray.dir_x = static_cast<float>(d.x);
+    rh.ray.dir_y = static_cast<float>(d.y);
+    rh.ray.dir_z = static_cast<float>(d.z);
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+}
+
 void throw_on_error(RTCDevice device, const char* what) {
     const RTCError e = rtcGetDeviceError(device);
     if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("Embree error during ") + what + ": " + std::to_string(e));
@@ -141,22 +160,10 @@ Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, doub
     q.skip = skip;
     q.skip_count = skip_count;
     q.skip_until = skip_until;
-    RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(o.x);
-    rh.ray.org_y = static_cast<float>(o.y);
-    rh.ray.org_z = static_cast<float>(o.z);
-    rh.ray.dir_x = static_cast<float>(d.x);
-    rh.ray.dir_y = static_cast<float>(d.y);
-    rh.ray.dir_z = static_cast<float>(d.z);
     // Float bounds rounded outward: the double interval is what counts for user geometry.
-    rh.ray.tnear = tmin > 0 ? std::nextafter(static_cast<float>(tmin), 0.0f) : 0.0f;
-    rh.ray.tfar = std::isinf(tmax) ? std::numeric_limits<float>::infinity()
-                                   : std::nextafter(static_cast<float>(tmax), INFINITY);
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = make_rayhit(o, d, tmin > 0 ? std::nextafter(static_cast<float>(tmin), 0.0f) : 0.0f,
+                               std::isinf(tmax) ? std::numeric_limits<float>::infinity()
+                                                : std::nextafter(static_cast<float>(tmax), INFINITY));
     rtcIntersect1(impl_->scene, &q.ctx, &rh);
     Candidate c;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return c;
@@ -177,19 +184,7 @@ Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, doub
 long EmbreeScene::raw_intersect(const Vec3& o, const Vec3& d, float tmin) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(o.x);
-    rh.ray.org_y = static_cast<float>(o.y);
-    rh.ray.org_z = static_cast<float>(o.z);
-    rh.ray.dir_x = static_cast<float>(d.x);
-    rh.ray.dir_y = static_cast<float>(d.y);
-    rh.ray.dir_z = static_cast<float>(d.z);
-    rh.ray.tnear = tmin;
-    rh.ray.tfar = std::numeric_limits<float>::infinity();
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = make_rayhit(o, d, tmin, std::numeric_limits<float>::infinity());
     rtcIntersect1(impl_->scene, &ctx, &rh);
     return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : static_cast<long>(rh.hit.primID);
 }
