@@ -137,3 +137,38 @@ seed: 11
     EXPECT_LT(std::fabs(total_diff) / std::sqrt(total_var), tol::normal_two_sided_quantile(tol::kFamilyAlpha));
     EXPECT_EQ(r.stats.nan_events, 0u);
 }
+
+TEST(BeerLambert, WindowTransmissionWithAbsorptionMatchesTheClosedForm) {
+    // A flat window (n = 1.5, thickness t, absorption alpha), light at normal incidence: summing
+    // the incoherent multiple reflections (Born & Wolf 7.6; each pass through the glass multiplies
+    // by e^{-alpha t}) gives the probability of reaching the display
+    //   tau = (1 - R)^2 e^{-alpha t} / (1 - R^2 e^{-2 alpha t}),  R = ((n - 1) / (n + 1))^2.
+    // The direct render of an all-on pattern estimates tau per pixel with its standard error
+    // (path weights carry e^{-alpha L}); every pixel must agree within the Bonferroni bound, and
+    // all pixels together within the single-test bound.
+    const double n = 1.5, t = 4.0, alpha = 0.2;
+    const char* yaml = R"(
+object: {type: window, thickness: 4.0, diameter: 40.0, ior: 1.5, absorption: 0.2}
+camera: {resolution: [12, 12], size: [20.0, 20.0], numerical_aperture: 0.0001, samples_per_pixel: 1024}
+display: {resolution: [10, 10], size: [200.0, 200.0], z: 30.0}
+seed: 5
+)";
+    const test::Built b = test::build(yaml);
+    const Tracer tracer(b.scene, b.solid);
+    std::vector<float> all_on(100, 1.0f);
+    RenderOptions o;
+    o.pattern = &all_on;
+    const RenderResult r = render(tracer, o);
+    const double R = std::pow((n - 1) / (n + 1), 2), a = std::exp(-alpha * t);
+    const double tau = (1 - R) * (1 - R) * a / (1 - R * R * a * a);
+    const double zmax = tol::bonferroni_z(static_cast<long>(r.image.size()));
+    double sum = 0, var = 0;
+    for (size_t k = 0; k < r.image.size(); ++k) {
+        ASSERT_GT(r.image_stderr[k], 0.0);
+        EXPECT_LT(std::fabs(r.image[k] - tau) / r.image_stderr[k], zmax) << "pixel " << k << ": " << r.image[k] << " vs " << tau;
+        sum += r.image[k] - tau;
+        var += r.image_stderr[k] * r.image_stderr[k];
+    }
+    EXPECT_LT(std::fabs(sum) / std::sqrt(var), tol::normal_two_sided_quantile(tol::kFamilyAlpha));
+    EXPECT_GT(r.stats.absorbed_weight, 0.0);
+}
