@@ -70,6 +70,10 @@ double Lens::edge_thickness() const {
     return z_back(a) - z_front(a);
 }
 
+bool Lens::is_convex() const {
+    return (std::isinf(spec_.r1) || spec_.r1 > 0) && (std::isinf(spec_.r2) || spec_.r2 < 0);
+}
+
 Surface Lens::front_surface() const {
     const double zv = -0.5 * spec_.center_thickness;
     if (std::isinf(spec_.r1)) return Surface::plane({0, 0, zv}, {0, 0, -1});

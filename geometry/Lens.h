@@ -50,6 +50,9 @@ public:
     double z_front(double rho) const;
     double z_back(double rho) const;
     double edge_thickness() const;
+    // Both faces convex or flat (r1 > 0 or inf, r2 < 0 or inf): the solid (two balls or
+    // half-spaces and the rim's cylinder, intersected) is a convex body.
+    bool is_convex() const;
 
     // Analytic surfaces. The front sphere/plane's reference normal is flipped where needed so
     // that the table entry's normal_sign can say how it relates to the outward normal.

@@ -112,9 +112,9 @@ Roots intersect(const Surface& s, const Vec3& o, const Vec3& d) {
             if (dn != 0) r.push(dot(s.origin - o, s.axis) / dn);
             return r;
         }
-        case SurfaceKind::Sphere: r = sphere(s.origin, s.radius, o, d); break;
-        case SurfaceKind::Cylinder: r = cylinder(s.origin, s.axis, s.radius, o, d); break;
-        case SurfaceKind::Ellipsoid: r = ellipsoid(s, o, d); break;
+        case SurfaceKind::Sphere: return sphere(s.origin, s.radius, o, d);  // solve_quadratic orders them
+        case SurfaceKind::Cylinder: return cylinder(s.origin, s.axis, s.radius, o, d);
+        case SurfaceKind::Ellipsoid: return ellipsoid(s, o, d);
         case SurfaceKind::Cone: r = cone(s, o, d); break;
         case SurfaceKind::Torus: r = torus(s, o, d); break;
     }

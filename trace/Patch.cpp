@@ -17,24 +17,34 @@ std::vector<Patch> object_patches(const Lens& lens) {
     out[0].bounds = {{-a, -a, std::fmin(zf0, zfa)}, {a, a, std::fmax(zf0, zfa)}};
     out[1].bounds = {{-a, -a, std::fmin(zb0, zba)}, {a, a, std::fmax(zb0, zba)}};
     out[2].bounds = {{-a, -a, zfa}, {a, a, zba}};
+    for (auto& p : out) p.finalize();
     return out;
 }
 
-double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax) {
+void Patch::finalize() {
     constexpr double slack = 8 * std::numeric_limits<double>::epsilon();
+    rho2_max = (a * (1 + slack)) * (a * (1 + slack));
+    const double zs = slack * (std::fabs(z_lo) + std::fabs(z_hi) + a);
+    z_min = z_lo - zs;
+    z_max = z_hi + zs;
+    if (!bounds.empty()) {
+        centre = (bounds.lo + bounds.hi) * 0.5;
+        bounding_radius = 0.5 * length(bounds.hi - bounds.lo) * (1 + slack);
+    }
+}
+
+double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax) {
     const Roots r = intersect(p.surface, o, d);
     for (int i = 0; i < r.count; ++i) {
         const double t = r.t[i];
         if (!(t > tmin && t < tmax)) continue;
         if (p.kind == Patch::Kind::Closed) return t;
         const Vec3 x = o + d * t;
-        const double rho = std::sqrt(x.x * x.x + x.y * x.y);
         if (p.kind == Patch::Kind::Rim) {
-            const double zs = slack * (std::fabs(p.z_lo) + std::fabs(p.z_hi) + p.a);
-            if (x.z >= p.z_lo - zs && x.z <= p.z_hi + zs) return t;
+            if (x.z >= p.z_min && x.z <= p.z_max) return t;
             continue;
         }
-        if (rho > p.a * (1 + slack)) continue;
+        if (x.x * x.x + x.y * x.y > p.rho2_max) continue;
         if (p.surface.kind == SurfaceKind::Sphere) {
             // The branch through the vertex: on the vertex's side of the centre's z.
             const double zc = p.surface.origin.z;

@@ -19,7 +19,20 @@ struct Patch {
     double z_vertex = 0;         // caps: the vertex height (selects the sphere's branch)
     double z_lo = 0, z_hi = 0;   // rim: the caps' edge heights
     Aabb bounds;
+    Vec3 centre;                 // a bounding sphere (for cheap rejection of closed patches)
+    double bounding_radius = 0;
+    // Precomputed by finalize(): the boundary tests' limits, with a few ulps of slack.
+    double rho2_max = 0, z_min = 0, z_max = 0;
+    void finalize();
 };
+
+// Does the segment o + t d, t in [0, tmax], come within the patch's bounding sphere?
+inline bool segment_near(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {
+    const Vec3 v = p.centre - o;
+    const double tc = std::fmin(std::fmax(dot(v, d), 0.0), tmax);
+    const Vec3 w = v - d * tc;
+    return dot(w, w) <= p.bounding_radius * p.bounding_radius;
+}
 
 // The front, back and rim patches of a lens, tagged 0, 1, 2 (SolidBuilder's kTagFront...).
 std::vector<Patch> object_patches(const Lens& lens);

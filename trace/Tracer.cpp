@@ -13,6 +13,9 @@ namespace ltm {
 
 namespace {
 constexpr double kFloatUlp = 1.0 / (1 << 23);  // relative spacing of floats
+// Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
+// test each) instead of querying Embree's BVH, whose call overhead is larger.
+constexpr size_t kLinearScanLimit = 16;
 }
 
 const char* to_string(Representation r) {
@@ -69,6 +72,9 @@ struct Tracer::State {
     std::uint32_t skip_prim = 0;
     bool skip = false;
     double skip_until = 0;
+    // Left a convex object through one of its own faces into the outside air: nothing of the
+    // object (whose defects all lie inside it) can be met again.
+    bool escaped = false;
 };
 
 Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
@@ -80,6 +86,7 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
       camera_(scene.camera, std::min(lens_.z_front(0), lens_.z_front(lens_.aperture_radius())) - 1.0) {
     const double a = lens_.aperture_radius();
     scale_ = std::max({a, lens_.spec().center_thickness, std::fabs(scene.display.z)});
+    convex_ = lens_.is_convex();
     object_patches_ = object_patches(lens_);
     for (size_t k = 0; k < scene.defects.size(); ++k)
         if (k < solid.corefined.size() && solid.corefined[k]) {
@@ -111,6 +118,7 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
             h[i] = std::sqrt(std::pow(d.frame(i, 0) * d.semi_axes.x, 2) + std::pow(d.frame(i, 1) * d.semi_axes.y, 2) +
                              std::pow(d.frame(i, 2) * d.semi_axes.z, 2));
         p.bounds = {d.center - h, d.center + h};
+        p.finalize();
         ellipsoids.push_back(p);
     }
     switch (options_.representation) {
@@ -230,6 +238,7 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
 }
 
 Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
+    if (st.escaped) return {};
     const Vec3& o = st.o;
     const Vec3& d = st.d;
     const SurfaceTable& table = solid_.surfaces;
@@ -251,7 +260,17 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
                 h.tag = p.tag;
             }
         }
-        if (!user_patches_.empty()) {
+        if (user_patches_.size() <= kLinearScanLimit) {
+            // A handful of defects: a box test each beats the cost of a BVH query.
+            for (const Patch& p : user_patches_) {
+                if (!segment_near(p, o, d, h.t)) continue;
+                const double t = patch_hit(p, o, d, 0.0, h.t);
+                if (t < h.t) {
+                    h.t = t;
+                    h.tag = p.tag;
+                }
+            }
+        } else {
             const Candidate c = embree_->intersect(o, d, 0.0, h.t);
             if (c.hit && c.t < h.t) {
                 h.t = c.t;
@@ -438,6 +457,8 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
         } else {
             nd = refract(st.d, nf, eta, cos_i, F.cos_t);
             st.medium = to;
+            st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
+                         from == Medium::Glass && to == Medium::Air;
             ++stats.transmissions;
             if (rec) rec->transmission *= 1.0 - F.reflectance;
         }

@@ -133,6 +133,7 @@ private:
     std::vector<Vec3> face_normals_;
     std::unique_ptr<EmbreeScene> embree_;
     double scale_ = 1;
+    bool convex_ = false;  // the object is a convex body (Lens::is_convex)
 };
 
 }  // namespace ltm
