@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <regex>
 #include <set>
 #include <cstdio>
 #include <filesystem>
@@ -123,4 +124,44 @@ TEST_F(MeshCommand, FailureLeavesAnExistingFileUntouched) {
     const fs::path bad = write("bad.yaml", "object: {type: lens}\n");
     EXPECT_EQ(ltmsim("mesh " + bad.string() + " -o " + keep.string(), dir).status, 2);
     EXPECT_EQ(slurp(keep), "the user's own file");
+}
+
+// MeshLab (Debian's meshlabserver, under xvfb) must see the solids ltmsim exports as closed
+// two-manifolds with the expected components: the default scene's lens with three enclosed bubble
+// cavities is 4 components; a surface-breaking pit is cut into the lens's one boundary; overlapping
+// and crossing defects leave one glass boundary plus their enclosed cavities. The counts of
+// vertices and faces must be ours (read back with OpenMesh).
+TEST_F(MeshCommand, MeshLabSeesClosedManifoldsWithTheExpectedComponents) {
+    for (const char* exe : {"meshlabserver", "xvfb-run", "timeout"})
+        if (ltm::test::run_shell(std::string("command -v ") + exe, dir).status != 0)
+            GTEST_SKIP() << exe << " is not on PATH: MeshLab check skipped";
+    std::ofstream(dir / "topology.mlx") << "<!DOCTYPE FilterScript>\n<FilterScript>\n"
+                                           " <filter name=\"Compute Topological Measures\"/>\n</FilterScript>\n";
+    const std::pair<const char*, long> cases[] = {{"default.yaml", 4}, {"examples/pit.yaml", 1}, {"examples/particle.yaml", 3}};
+    for (const auto& [rel, components] : cases) {
+        SCOPED_TRACE(rel);
+        const fs::path ply = dir / "m.ply";
+        fs::remove(ply);
+        ASSERT_EQ(ltmsim("mesh " + scene(rel) + " -o " + ply.string(), dir).status, 0);
+        const ltm::MeshFileSummary ours = ltm::read_mesh_summary(ply.string());
+        fs::remove(dir / "topology.log");
+        const ltm::test::Outcome r = ltm::test::run_shell(
+            "cd '" + dir.string() + "' && timeout 120 xvfb-run -a meshlabserver -i m.ply -s topology.mlx -l topology.log", dir);
+        ASSERT_EQ(r.status, 0) << r.out << r.err;
+        const std::string log = slurp(dir / "topology.log");
+        auto number = [&](const std::string& pattern) -> long {
+            std::smatch m;
+            if (!std::regex_search(log, m, std::regex(pattern))) {
+                ADD_FAILURE() << "'" << pattern << "' not in the MeshLab log:\n" << log;
+                return -1;
+            }
+            return std::stol(m[1]);
+        };
+        EXPECT_EQ(number(R"(V:\s*(\d+))"), static_cast<long>(ours.vertices));
+        EXPECT_EQ(number(R"(F:\s*(\d+))"), static_cast<long>(ours.faces));
+        EXPECT_EQ(number(R"(Boundary Edges (\d+))"), 0);
+        EXPECT_EQ(number(R"(Mesh has (\d+) holes)"), 0);
+        EXPECT_EQ(number(R"(Mesh is composed by (\d+) connected component)"), components);
+        EXPECT_TRUE(std::regex_search(log, std::regex(R"((^|\n)\s*Mesh is two-manifold)"))) << log;
+    }
 }
