@@ -68,11 +68,8 @@ bool read_rays(const std::string& path, std::vector<InputRay>& out) {
         }
         if (!has_o) return bad("missing key \"origin\"");
         if (!has_d) return bad("missing key \"direction\"");
-        // Any finite non-zero vector is a direction: rescale by its largest component first, so
-        // neither 1e200 nor 1e-170 over- or underflows when its length is taken.
-        const double big = std::max({std::fabs(r.direction.x), std::fabs(r.direction.y), std::fabs(r.direction.z)});
-        if (!(big > 0)) return bad("\"direction\" must not be the zero vector");
-        r.direction = normalize(r.direction / big);
+        // Any finite non-zero vector is a direction (the tracer normalises it, whatever its size).
+        if (r.direction == Vec3{0, 0, 0}) return bad("\"direction\" must not be the zero vector");
         out.push_back(r);
     }
     return true;

@@ -34,6 +34,12 @@ constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
 inline double length(const Vec3& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 constexpr double length2(const Vec3& v) { return dot(v, v); }
 inline Vec3 normalize(const Vec3& v) { return v / length(v); }
+// normalize for a vector of any finite magnitude (user input): rescaled by its largest
+// component first, so neither 1e200 nor 1e-170 over- or underflows when squared.
+inline Vec3 normalize_any(const Vec3& v) {
+    const double big = std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
+    return normalize(v / big);
+}
 inline double distance(const Vec3& a, const Vec3& b) { return length(a - b); }
 inline bool is_finite(const Vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);

@@ -501,7 +501,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
 Tracer::FirstHit Tracer::first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const {
     State st;
     st.o = origin;
-    st.d = normalize(direction);
+    st.d = normalize_any(direction);
     st.medium = medium;
     const Hit h = next_hit(st, stats);
     FirstHit f;
@@ -516,7 +516,7 @@ PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) 
     PathStats stats;
     State st;
     st.o = origin;
-    st.d = normalize(direction);
+    st.d = normalize_any(direction);
     st.medium = medium_at(origin);
     if (st.medium == Medium::Absorber) {
         rec.absorbed = true;
