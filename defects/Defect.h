@@ -13,24 +13,34 @@
 //   d > w/2). Ends are flat, perpendicular to the path.
 // Particle: an opaque absorbing inclusion (sphere or ellipsoid) strictly inside the glass, kept as
 //   its own closed component of the mesh.
+// Inhomogeneity: a local change of the glass's index inside a sphere or ellipsoid (defects/Inclusion.h):
+//   smooth:  n = n_glass + delta_n (1 - rho^2)^2 for rho < 1 (C1 at rho = 1: no interface); the
+//            region is meshed by TetGen and traced through its tetrahedra;
+//   uniform: n = n_glass + delta_n inside, a sharp interface on the exact ellipsoid (Fresnel, Snell).
+//   rho = |x - center| / radius (the body-frame ellipsoidal radius for semi_axes).
 #include <string>
 
 #include "geometry/Vec3.h"
 
 namespace ltm {
 
-enum class DefectType { Bubble, Scratch, Particle };
+enum class DefectType { Bubble, Scratch, Particle, Inhomogeneity };
+enum class IndexProfile { Smooth, Uniform };
 enum class ScratchProfile { V, U };
 const char* to_string(DefectType t);
 
 struct Defect {
     DefectType type = DefectType::Bubble;
 
-    // Bubble and Particle: an ellipsoid with body axes the columns of `frame`.
+    // Bubble, Particle, Inhomogeneity: an ellipsoid with body axes the columns of `frame`.
     Vec3 center;
     Vec3 semi_axes{0.1, 0.1, 0.1};
     Mat3 frame;
     bool surface_breaking = false;  // Bubble only
+
+    // Inhomogeneity.
+    double delta_n = 0;             // peak change of n (may be negative, never 0)
+    IndexProfile index_profile = IndexProfile::Smooth;
 
     // Scratch.
     int side = 0;                   // 0: front face, 1: back face
@@ -44,6 +54,7 @@ struct Defect {
     double width = 0.05, depth = 0.02;
     ScratchProfile profile = ScratchProfile::V;
 
+    bool is_ellipsoid() const { return type != DefectType::Scratch; }
     bool is_sphere() const { return semi_axes.x == semi_axes.y && semi_axes.y == semi_axes.z; }
     double max_semi_axis() const;
 };

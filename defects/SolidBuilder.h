@@ -15,6 +15,9 @@ struct MeshOptions {
     double chord_tolerance = 1e-3;            // mm: max face-to-surface distance of the object
     double defect_relative_tolerance = 0.01;  // tools: chord error <= this x their smallest size
     bool always_boolean = false;              // corefine even strictly enclosed defects
+    // Largest difference between n^2 interpolated linearly over a tetrahedron and the field's n^2,
+    // anywhere in a TetGen-meshed region (smooth inhomogeneities, non-quadratic index fields).
+    double index_tolerance = 1e-4;
 };
 
 struct Solid {

@@ -23,7 +23,14 @@ struct LensSpec {
     double center_thickness = 1.0;
     double diameter = 10.0;
     double ior = 1.5;
+    // A ball (object type sphere): r1 = R, r2 = -R, t = D = 2 R. It is the lens whose edge
+    // thickness is exactly zero: the caps are the two hemispheres, meeting at the equator z = 0,
+    // and the rim has no height. Only a ball may have a zero edge thickness.
+    bool ball = false;
 };
+
+// The spec of a ball of radius R centred at the origin.
+LensSpec ball_spec(double radius, double ior);
 
 // The analytic sag of a sphere of signed radius R at radial distance rho (0 for R = inf).
 double sphere_sag(double R, double rho);

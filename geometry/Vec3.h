@@ -65,6 +65,7 @@ inline void orthonormal_basis(const Vec3& n, Vec3& b1, Vec3& b2) {
 struct Mat3 {
     std::array<double, 9> m{1, 0, 0, 0, 1, 0, 0, 0, 1};
     static Mat3 identity() { return {}; }
+    static Mat3 zero() { return Mat3{{0, 0, 0, 0, 0, 0, 0, 0, 0}}; }
     double operator()(int r, int c) const { return m[3 * r + c]; }
     double& operator()(int r, int c) { return m[3 * r + c]; }
     Vec3 operator*(const Vec3& v) const {
@@ -85,6 +86,17 @@ struct Mat3 {
         return r;
     }
     Vec3 column(int c) const { return {(*this)(0, c), (*this)(1, c), (*this)(2, c)}; }
+    Mat3 operator*(double s) const {
+        Mat3 r = *this;
+        for (double& x : r.m) x *= s;
+        return r;
+    }
+    Mat3 operator+(const Mat3& o) const {
+        Mat3 r = *this;
+        for (int i = 0; i < 9; ++i) r.m[i] += o.m[i];
+        return r;
+    }
+    bool operator==(const Mat3& o) const { return m == o.m; }
 };
 
 // Rotation from intrinsic-free Euler angles in degrees: R = Rz(c) * Ry(b) * Rx(a), i.e. the body

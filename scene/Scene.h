@@ -8,18 +8,20 @@
 
 #include "defects/Defect.h"
 #include "defects/SolidBuilder.h"
+#include "geometry/IndexField.h"
 #include "geometry/Lens.h"
 
 namespace ltm {
 
-enum class ObjectType { Lens, Window };
+enum class ObjectType { Lens, Window, Sphere };
 enum class RimFinish { Polished, Absorbing };
 
 struct ObjectDesc {
     ObjectType type = ObjectType::Lens;
-    LensSpec lens;                   // a window is a lens with r1 = r2 = inf
+    LensSpec lens;                   // a window is a lens with r1 = r2 = inf; a sphere is ball_spec(R)
     RimFinish rim = RimFinish::Polished;
     double absorption = 0.0;         // Beer-Lambert attenuation coefficient of the glass, 1/mm
+    IndexField index_field;          // Uniform (n = lens.ior everywhere) unless the scene gives one
 };
 
 struct CameraDesc {

@@ -1,0 +1,68 @@
+#pragma once
+// Tetrahedral meshes of the regions where the glass's index is neither constant nor a quadratic
+// n^2 (smooth inhomogeneities; the linear-n field): TetGen fills a closed boundary surface with
+// tetrahedra, refined until n^2 interpolated linearly over every tetrahedron is within a
+// tolerance of the field. The tracer then follows exact parabolas through them (trace/TetWalk.h).
+//
+// TetGen (AGPL-3+) is a PRIVATE dependency of geometry/, like CGAL: only geometry/TetGen.cpp
+// includes <tetgen.h>. Nothing here exposes a TetGen type.
+//
+// Interpolation error bound (Waldron, "The error in linear interpolation at the vertices of a
+// simplex", SIAM J. Numer. Anal. 35, 1998): for f twice differentiable on a tetrahedron T with
+// ||D^2 f||_2 <= M on T, |f - I f| <= M r^2 / 2 on T, where r is the radius of the smallest ball
+// containing T. A tetrahedron is refined while M r^2 / 2 > tolerance, with M from the region's
+// `hessian_bound` over that ball; so the bound holds everywhere in the mesh.
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "geometry/StageReport.h"
+#include "geometry/TriMesh.h"
+#include "geometry/Vec3.h"
+
+namespace ltm {
+
+struct TetMesh {
+    std::vector<Vec3> vertices;
+    std::vector<double> n2;                           // per vertex: the field's n^2 there
+    std::vector<std::array<std::uint32_t, 4>> tets;   // positively oriented: det(b-a, c-a, d-a) > 0
+    // neighbors[t][i]: the tetrahedron across the face opposite vertex i of t, or -1 (the
+    // boundary of the meshed region).
+    std::vector<std::array<std::int32_t, 4>> neighbors;
+    double error_bound = 0;      // the largest M r^2 / 2 over the tetrahedra (<= the tolerance)
+    std::string name;            // the region's name, e.g. "defects[2]" or "object"
+
+    size_t num_tets() const { return tets.size(); }
+    Aabb bounds() const;
+};
+
+// What to mesh. The boundary must enclose the whole region in which paths are traced through the
+// field (a circumscribed surface: an inclusion's ellipsoid lies inside it).
+struct TetRegion {
+    std::string name;                      // names the region in errors: "defects[2]", "object"
+    TriMesh boundary;                      // closed, outward, two-manifold, not self-intersecting
+    std::function<double(const Vec3&)> n2; // the field
+    // An upper bound on ||D^2 n^2||_2 over the ball (centre, radius).
+    std::function<double(const Vec3& centre, double radius)> hessian_bound;
+    double tolerance = 1e-4;               // on n^2: M r^2 / 2 <= tolerance in every tetrahedron
+    // Clipping: false when the ball (centre, radius) certainly lies outside the part of the region
+    // that paths can reach (outside the glass); those tetrahedra are dropped after meshing.
+    std::function<bool(const Vec3& centre, double radius)> keep;
+    size_t max_tets = 20'000'000;          // refuse (TetGenError) rather than exhaust memory
+};
+
+// A TetGen failure (invalid input, an internal error code, or too many tetrahedra), reported with
+// the region's name; never an abort.
+struct TetGenError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// Meshes the region (TetGen -pq with the refinement criterion above), drops the tetrahedra that
+// `keep` rejects, orients every tetrahedron positively and fills the neighbour list. Records a
+// "tetgen" stage (time, tetrahedra, vertices, error bound) in the report. Throws TetGenError.
+TetMesh tetrahedralize(const TetRegion& region, StageReport* report = nullptr);
+
+}  // namespace ltm
