@@ -24,8 +24,29 @@ double cap_area(double R, double a) {
     return 2.0 * kPi * std::fabs(R) * std::fabs(sphere_sag(R, a));
 }
 
+LensSpec ball_spec(double radius, double ior) {
+    LensSpec s;
+    s.r1 = radius;
+    s.r2 = -radius;
+    s.center_thickness = 2.0 * radius;
+    s.diameter = 2.0 * radius;
+    s.ior = ior;
+    s.ball = true;
+    return s;
+}
+
 std::vector<Lens::Problem> Lens::problems(const LensSpec& s) {
     std::vector<Problem> out;
+    if (s.ball) {
+        // A ball is given by its radius alone (ball_spec); the lens keys are derived from it.
+        if (!(s.r1 > 0) || !std::isfinite(s.r1))
+            out.push_back({"radius", fmt::format("must be a positive finite length (got {})", s.r1)});
+        else if (s.r2 != -s.r1 || s.center_thickness != 2.0 * s.r1 || s.diameter != 2.0 * s.r1)
+            out.push_back({"radius", "a ball's radii, thickness and diameter must be those of ball_spec"});
+        if (!(s.ior > 1.0) || !std::isfinite(s.ior))
+            out.push_back({"ior", fmt::format("the glass's refractive index must be > 1 (got {})", s.ior)});
+        return out;
+    }
     const double a = 0.5 * s.diameter;
     auto bad_radius = [&](const char* key, double R) {
         if (std::isnan(R) || R == 0.0)

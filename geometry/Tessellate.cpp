@@ -110,11 +110,16 @@ LensTessellation build_lens(const Lens& lens, int n, int tag_front, int tag_back
     back[0] = {m.add_vertex({0, 0, lens.z_back(0)})};
     for (int i = 1; i <= n; ++i) {
         front[i] = make_ring(rf[i], lens.z_front(rf[i]), 6 * i);
-        back[i] = make_ring(rb[i], lens.z_back(rb[i]), 6 * i);
+        // A ball's hemispheres meet at the equator: they share its ring, and there is no rim.
+        back[i] = lens.spec().ball && i == n ? front[n] : make_ring(rb[i], lens.z_back(rb[i]), 6 * i);
     }
     for (int i = 0; i < n; ++i) {
         stitch_rings(m, front[i], front[i + 1], /*up=*/false, tag_front);
         stitch_rings(m, back[i], back[i + 1], /*up=*/true, tag_back);
+    }
+    if (lens.spec().ball) {
+        out.rim_rows = 0;
+        return out;
     }
     // Rim: rows of quads from the front's outer ring (z0) to the back's (z1), outward normal.
     const double z0 = lens.z_front(a), z1 = lens.z_back(a);
