@@ -11,9 +11,11 @@
 //   spherical_n2   n^2 = ior^2 (1 - g^2 |x|^2)        (Luneburg when ior = sqrt 2, g = 1 / (R sqrt 2))
 //                                                                       b = 0, H = -2 ior^2 g^2 I
 //   quadratic_n2   n^2 = ior^2 + gradient . x + x^T hessian x / 2       b = gradient, H = hessian
-// One kind is not closed form and is meshed by TetGen over the whole object, its n^2 linear in each
-// tetrahedron (the control case of docs/validation.md):
-//   linear_n       n = ior + gradient . x          (a catenary in a plane containing the gradient)
+// One kind is meshed by TetGen over the whole object ON PURPOSE, its n^2 linear in each tetrahedron:
+//   linear_n       n = ior + gradient . x
+// Its exact rays are catenaries in the planes containing the gradient, which makes it the control
+// case of the tetrahedral tracer (its O(h^2) convergence is tested against them). The same field
+// in closed form is quadratic_n2 with gradient 2 ior g and hessian 2 g g^T.
 #include <string>
 #include <vector>
 
@@ -42,7 +44,7 @@ struct IndexField {
     Mat3 hessian = Mat3::zero();    // quadratic_n2: of n^2 (1/mm^2), symmetric
 
     bool graded() const { return type != IndexFieldType::Uniform; }
-    // n^2 is quadratic in x (Uniform included): the paths are closed form.
+    // Traced in closed form (n^2 quadratic; Uniform included), not through a TetGen mesh.
     bool closed_form() const { return type != IndexFieldType::LinearN; }
     // The quadratic form of n^2. Precondition: closed_form().
     QuadraticForm n2_form() const;
