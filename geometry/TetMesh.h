@@ -52,7 +52,29 @@ struct TetRegion {
     // that paths can reach (outside the glass); those tetrahedra are dropped after meshing.
     std::function<bool(const Vec3& centre, double radius)> keep;
     size_t max_tets = 20'000'000;          // refuse (TetGenError) rather than exhaust memory
+    // How deep a point lies inside the region (its distance from the region's boundary, positive
+    // inside; any lower bound of it will do). With it, the interior is filled with a regular
+    // lattice (see tetrahedralize); without it, TetGen's Delaunay refinement fills it alone.
+    std::function<double(const Vec3&)> depth;
 };
+
+// The lattice an interior is filled with: body-centred cubic, of cube edge `a`, turned by a fixed
+// generic rotation. Why a lattice: piecewise-linear interpolation of a smooth field errs in its
+// gradient by O(h M) (the field's curvature over a tetrahedron), and a path bends with that
+// gradient. On an unstructured mesh the errors of the ~L/h tetrahedra a path crosses add like a
+// random walk, O(h^1.5) in the end. On a lattice the gradient error is the same periodic function
+// in every cell, with zero mean over a cell, and along a path that crosses the cells at a generic
+// (irrational) angle it averages out, leaving O(h^2) = O(tolerance). Measured for the 2.5 mm,
+// delta_n = 0.02 inclusion of scenes/examples/inclusion-smooth.yaml (display 60 mm behind; rays on
+// a 0.2 mm grid; docs/grin.md): unstructured, 1.9 million tetrahedra at the tolerance 1e-4, display
+// errors 0.018 mm at most and 0.0037 mm on average, converging as tolerance^0.7; lattice,
+// 1.5 million tetrahedra at 1e-4, 0.0072 mm and 0.0015 mm, the average converging as
+// tolerance^1.0. The rotation keeps telecentric rays (along z) off the lattice's rows, along which
+// the periodic error would not average. BCC's Delaunay tetrahedra are congruent, with circumradius
+// a sqrt(5) / 4, which is their smallest enclosing radius (the circumcentre lies inside), so
+// a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where ||D^2 n^2|| <= M.
+inline constexpr double kLatticeAngles[3] = {37.3, 23.7, 11.1};  // degrees, rotation_from_euler_deg
+double lattice_spacing(double tolerance, double hessian_bound);
 
 // A TetGen failure (invalid input, an internal error code, or too many tetrahedra), reported with
 // the region's name; never an abort.
@@ -60,9 +82,16 @@ struct TetGenError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-// Meshes the region (TetGen -pq with the refinement criterion above), drops the tetrahedra that
+// Meshes the region (TetGen -pq with the refinement criterion above; with a `depth`, TetGen also
+// inserts the lattice points at least 0.6 a inside, a = lattice_spacing(tolerance, the region's
+// largest Hessian bound), so that only the layer along the boundary is left to its refinement),
+// drops the tetrahedra that
 // `keep` rejects, orients every tetrahedron positively and fills the neighbour list. Records a
 // "tetgen" stage (time, tetrahedra, vertices, error bound) in the report. Throws TetGenError.
 TetMesh tetrahedralize(const TetRegion& region, StageReport* report = nullptr);
+
+// The radius of the smallest ball containing the four points (the circumsphere of 2, 3 or all 4
+// of them), and its centre.
+double smallest_enclosing_ball(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, Vec3* centre);
 
 }  // namespace ltm

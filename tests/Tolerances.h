@@ -240,3 +240,193 @@ inline double mad_constant_rounding() { return 5e-5; }
 constexpr double kNegligibleProbability = 1e-3;
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// ---- trace_polynomial, trace_grin: roots and closed-form curved paths ----
+
+// A simple root x* of p(x) = sum c_i x^i (degree n) located by sign changes and polished until
+// the bracket cannot shrink: the computed root is where Horner's evaluation of p changes sign,
+// which the rounding of the evaluation moves by at most (2 n u sum_i |c_i| |x*|^i) / |p'(x*)|
+// (Higham, Accuracy and Stability, 2nd ed., Sec. 5.1: Horner's error bound gamma_2n times the
+// absolute sum, over the slope); twice that covers the last bisection step.
+inline double poly_root(int degree, double abs_sum, double slope) {
+    return 2.0 * (2.0 * degree * (kEps / 2) * abs_sum) / std::fabs(slope);
+}
+
+// A closed-form graded-index path (trace/GrinPath.h) against its closed form evaluated in the
+// test, per interface: the crossing's parameter is polished until f = F(r(tau)) changes sign,
+// which rounding (|F| evaluated to ~8 u L^2 for a quadric of size L) moves by 8 u L^2 / |f'| with
+// |f'| = 2 |L (r - c)| |p| cos(theta) ~ 2 L n cos(theta): a position error n dtau <= 4 u L / cos;
+// the test rays meet their surfaces at cos >= 1/8, so <= 32 u L; evaluating r(tau) (sines,
+// cosines and ~16 rounded products and sums of magnitude <= L) and the rotation into and out of
+// H's eigenbasis (~12 more) add ~30 u L: ~64 u L per interface and implementation, twice for the
+// tracer and the test's own closed form, times (1 + kappa) for the path's sensitivity, over the
+// n interfaces plus the final propagation: 128 (n + 1) u L (1 + kappa).
+inline double grin_closed_form(int interfaces, double scale, double kappa) {
+    return 128.0 * (interfaces + 1) * (kEps / 2) * scale * (1.0 + kappa);
+}
+
+}  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// ---- geometry_index_field: index fields and the exact range of a quadratic over the lens solid ----
+// u = eps / 2 below. Q = |c| + |b| L + |H|_F L^2 is the magnitude of q(x) = c + b . x + x^T H x / 2
+// at |x| <= L: |b . x| <= |b| L and sum_ij |x_i H_ij x_j| <= |H|_F |x|^2 (Cauchy-Schwarz; the
+// factor 1/2 is dropped for margin).
+
+// q evaluated in double: H x (3 products and 2 sums per component), the two dot products, the
+// halving (exact) and the two final sums put every term through at most 8 roundings, so the result
+// is within gamma_8 ~ 8 u Q of exact. Two evaluations of one field by different formulas (the
+// quadratic form and a hand formula, itself of <= 8 roundings): 16 u Q = 8 eps Q; 16 eps Q leaves
+// a factor 2.
+inline double quadratic_agreement(double magnitude) { return 16.0 * kEps * magnitude; }
+
+// An extreme reported by quadratic_range against q at a point of the solid, or against a closed
+// form, where L bounds every coordinate and also every sphere centre and radius the points are
+// computed from (x = C + R u):
+//   - each of the two values carries the evaluation error 8 u Q (above): 16 u Q;
+//   - each point is off its exact position by the rounding of its coordinates, <= 8 u L (C + R u
+//     with u normalised; a sample accepted by Lens::contains within the rounding of z_front and
+//     z_back). Along its stratum an exact extreme is stationary, so only the component across it
+//     changes q, by <= |grad q| 8 u L <= 8 u (|b| L + |H|_F L^2): 16 u (|b| L + |H|_F L^2) for two;
+//   - the eigendecomposition and the secular-equation roots are backward stable: the candidates
+//     are exact stationary points of the stratum's form perturbed by ~8 u relative in
+//     A = R^2 H / 2 and beta = R (b + H C), which moves the extreme by <= 8 u (|H|_F L^2 + |b| L).
+// In all <= 16 u |c| + 40 u |b| L + 40 u |H|_F L^2 <= 40 u Q; 80 u Q = 40 eps Q leaves a factor 2.
+inline double quadratic_extreme(double magnitude) { return 40.0 * kEps * magnitude; }
+
+// The Luneburg ball (R = 10, ior = sqrt 2 rounded, g = 0.0707106781186548 typed to 15 significant
+// digits) at its surface: n^2 = ior^2 (1 - g^2 R^2) is exactly 1 for the exact constants. The
+// typed g is within half a unit of its last digit, 5e-17, of 1 / (R sqrt 2), which moves n^2 by
+// |d n^2 / dg| 5e-17 = 2 ior^2 g R^2 5e-17 = 28.3 x 5e-17 = 1.5e-15; ior^2 is 2 (1 + 2 u) at most,
+// 4.4e-16; the extreme itself is within quadratic_extreme's 40 u Q with Q = 2 + |H|_F R^2 =
+// 2 + sqrt 3 x 0.02 x 100 = 5.5: 2.5e-14. So |n^2 - 1| < 2.7e-14 and |n - 1| = |n^2 - 1| / (n + 1)
+// < 1.4e-14; 3e-14 leaves a factor 2.
+inline double luneburg_surface_index() { return 3e-14; }
+
+}  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// ---- validation_grin: the GRIN reference solver (validation/GrinReference.h) against closed forms ----
+
+// A path of the GRIN reference against an exact closed-form path. The integrator accepts a step
+// when its local error estimate is below tol x size in every position component and below
+// tol x p_scale in every momentum component (GrinReference.cpp, "Step-size control"); the kept
+// result (the extrapolated T_{8,8}) is at least as accurate as the estimated T_{8,7} (local
+// extrapolation, in the asymptotic regime of the step sizes). A local error then propagates like
+// a perturbation of the ray at that point (Lady Windermere's fan, Hairer, Norsett, Wanner, Solving
+// ODEs I, Sec. II.3), bounded with the assumption of validation/ValidationTolerance.h (a sub-path
+// magnifies no more than the whole path, kappa): a position error e moves the later vertices and
+// the display hit by <= (1 + kappa) e; a momentum error tol p_scale turns the direction by
+// <= tol p_scale / n_min, which moves them by <= (1 + kappa) L tol p_scale / n_min. Over `steps`
+// steps (accepted steps and the event-locating re-steps, +1 for the final partial step of each
+// leg, counted once in all):
+//   (1 + kappa) (steps + 1) tol (size + L p_ratio),   p_ratio = p_scale / n_min.
+// Rounding: the reference's own, C_ref u L (1 + kappa) with C_ref = grin_reference_constant of
+// validation/ValidationTolerance.h (its interfaces, roots, state updates and increments, derived
+// there), and the closed form's, evaluated in double within the "+ 2" of closed_form_path:
+// 128 u L (1 + kappa).
+inline double grin_reference_path(int steps, double reference_constant, double tol, double size, double L,
+                                  double p_ratio, double kappa) {
+    return (1.0 + kappa) * ((steps + 1) * tol * (size + L * p_ratio) + (reference_constant + 128.0) * (kEps / 2) * L);
+}
+
+// The same for a direction (rad), with L = 1 in the rounding terms:
+//   (1 + kappa_dir) [(steps + 1) tol (size / L + p_ratio) + (C_ref + 128) u].
+inline double grin_reference_direction(int steps, double reference_constant, double tol, double size, double L,
+                                       double p_ratio, double kappa_dir) {
+    return (1.0 + kappa_dir) *
+           ((steps + 1) * tol * (size / L + p_ratio) + (reference_constant + 128.0) * (kEps / 2));
+}
+
+// The deflection of a ray by a weak smooth spherical inclusion n = n0 + dn (1 - r^2/a^2)^2 (r < a)
+// against its first-order value theta1(b) = -(dn / n0) 16 b (a^2 - b^2)^(3/2) / (3 a^4) (derived
+// in validation_grin.cpp, SmoothInclusion). The exact ray has d/ds (n dx/ds) = dn/dx, so its final
+// transverse momentum is P = int dn/dx (x(z), z) (ds/dz) dz along the TRUE path, and sin(theta)
+// = P / n0; the first order theta1 is P / n0 with the integrand on the straight line x = b and
+// ds = dz. With eps = |dn| / n_min and the profile's bounds (q = (1 - r^2/a^2)^2:
+// |dq/dx| = |4 x (1 - r^2/a^2)| / a^2 <= 8 / (3 sqrt(3) a) ~ 1.54 / a, at r = a / sqrt 3;
+// |d^2q/dx^2| = |-4 (1 - r^2/a^2) + 8 x^2 / a^2| / a^2 <= 8 / a^2):
+//   the direction turns by at most |theta(z)| <= 1.54 eps (z + a) / a since the ray entered the
+//   inclusion (at z >= -a), so it leaves x = b by at most int_{-a}^{z} |theta| <= 0.77 eps (z + a)^2 / a
+//   <= 3.08 eps a (both integrands vanish outside |z| < a);
+//   (i) sampling the gradient off the line: <= 8 dn / a^2 x 3.08 eps a x 2a = 49.3 dn eps;
+//   (ii) ds / dz - 1 = 1 / cos(theta) - 1 <= theta^2 / 2: <= 1.54 dn / a x (3.08 eps)^2 / 2 x 2a = 14.6 dn eps^2.
+// Divided by n0 (|dn| / n0 <= eps): |sin(theta) - theta1| <= 49.3 eps^2 + 14.6 eps^3 (and higher
+// orders in eps^4), below 64 eps^2 for every eps <= 0.5 (the inclusions here have eps <= 0.014).
+inline double weak_lens_second_order(double eps) { return 64.0 * eps * eps; }
+
+}  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// An identity on the outputs of a closed form of validation/GrinClosedForms.h evaluated in double
+// (|p|^2 = n^2 along a path, a path function against the exit value, two closed forms of the same
+// path): each side is <= 32 roundings (a trigonometric or hyperbolic function within 1 ulp counted
+// as 2, the argument's rounding as 1 more), each relative to operands of magnitude <= M (the
+// identity's terms, e.g. R for positions in a sphere of radius R, n^2 for |p|^2, n0 / |k| where a
+// form divides by the gradient k): both sides within 32 u M, their difference within 64 u M.
+inline double closed_form_identity(double magnitude) { return 64.0 * (kEps / 2) * magnitude; }
+
+}  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// ---- geometry_tetmesh: tetrahedral meshes (geometry/TetMesh.h) ----
+
+// Total volume of a tetrahedral mesh against the volume its input boundary encloses, both summed
+// in long double from the double coordinates (unit roundoff u_L = epsilon of long double).
+//   With exact arithmetic the tetrahedra's volumes add up to the volume enclosed by the mesh's
+//   own boundary faces (inner faces cancel). That surface is the input surface except where
+//   Steiner points were put on it: TetGen computes them from a few input vertices (segment
+//   midpoints, circumcentres of boundary triangles: a few dozen rounded operations on
+//   coordinates <= L), the bisection post-pass as edge midpoints; each lands within 64 eps L of
+//   the input triangle it belongs to. Moving a surface's vertices by <= d sweeps a volume
+//   <= d x area, so the two volumes differ by <= 64 eps L A.
+//   Each determinant in long double is within ~10 u_L of the product of its edge lengths
+//   |u||v||w| (the terms of abs_sum are those products / 6), and summing n terms adds n u_L of
+//   their absolute sum: (n + 16) u_L abs_sum bounds both evaluations' rounding when abs_sum
+//   covers both sums' terms.
+inline double tetmesh_volume(double L, double area, long double abs_sum, size_t terms) {
+    return 64.0 * kEps * L * area +
+           static_cast<double>((static_cast<long double>(terms) + 16) * std::numeric_limits<long double>::epsilon() *
+                               abs_sum);
+}
+
+// Linear interpolation of n^2 checked at a point x = sum l_i p_i of a tetrahedron, against the
+// field evaluated at x, both in double: the field's own evaluation (about ten operations on
+// values <= n2_max) is within 16 eps n2_max of its exact value at the computed x; the computed x
+// is within 4 eps L of the exact combination (three products and additions per coordinate),
+// which moves the field by <= |grad n^2| 4 eps L; the interpolated value sum l_i n2_i by
+// <= 8 eps n2_max. In all 24 eps n2_max + 4 eps L |grad n^2|_max; doubled for margin.
+inline double interpolation_rounding(double n2_max, double L, double grad_max) {
+    return 48.0 * kEps * n2_max + 8.0 * kEps * L * grad_max;
+}
+
+// Smallest enclosing ball of four points, by the library (the best of 11 candidate centres) and
+// by the test's own Welzl recursion (circumcentres solved as linear systems): both compute the
+// circumcentre of the same support set, each from a linear system whose condition number kappa is
+// below ~1e3 for the tetrahedra TetGen makes (dihedral angles above ~5 degrees; measured >= 6);
+// the centre is then within ~8 kappa eps r of the exact one and the radius (1-Lipschitz in the
+// centre) as well: < 2e-12 r. 1e-9 r allows kappa up to 5e5.
+constexpr double kEnclosingRadiusRelative = 1e-9;
+
+// Halving the tolerance on n^2 with a constant Hessian bound M shrinks the largest allowed
+// enclosing radius sqrt(2 t / M) by sqrt 2, so the count of tetrahedra filling a fixed volume
+// grows by 2^(3/2) = 2.83 in the limit. Before the limit the layer along the boundary (whose
+// count grows like area / r^2: a factor 2) and the discreteness of Delaunay refinement (sizes
+// fall between about r_max / 2 and r_max, and the mix shifts between tolerances) move it: the
+// ratio is asserted in [2, 4.5], i.e. at least the surface's scaling and at most 1.6 times the
+// volume's.
+constexpr double kHalvingCountRatioLow = 2.0;
+constexpr double kHalvingCountRatioHigh = 4.5;
+
+// n = sqrt(n2) as written to a VTU file, squared again by the reader, against n2 <= v: the root
+// is correctly rounded (n (1 + d), |d| <= u = eps / 2) and so is the square, so the result is
+// n2 (1 + d)^2 (1 + d') within 3 u n2 of n2 (to first order); 2 eps v covers it.
+inline double square_of_root(double v) { return 2.0 * kEps * v; }
+
+}  // namespace ltm::tol
