@@ -69,7 +69,10 @@ bool supports(const Scene& scene, std::string* why) {
         return fail("object: invalid geometry (diameter, thickness and ior - 1 must be positive)");
     if ((std::isfinite(s.r1) && std::fabs(s.r1) < a) || (std::isfinite(s.r2) && std::fabs(s.r2) < a))
         return fail("object: a face's |R| is smaller than the semi-diameter");
-    if (!(s.center_thickness + sag(s.r2, a) - sag(s.r1, a) > 0))
+    // A ball (object type sphere: r1 = R, r2 = -R, t = D = 2R) is the one solid whose edge
+    // thickness is exactly zero: its caps are the two hemispheres and its rim has no height.
+    const double edge = s.center_thickness + sag(s.r2, a) - sag(s.r1, a);
+    if (!(edge > 0) && !(s.ball && edge == 0))
         return fail("object: the edge thickness is not positive");
     const auto& D = scene.defects;
     for (size_t k = 0; k < D.size(); ++k) {

@@ -29,7 +29,15 @@ struct ValidationReport {
     bool passed() const { return total.sequence_mismatches == 0 && total.over_tolerance == 0; }
 };
 
-// Precondition: supports(scene). Traces validation_rays(scene, density) with `representation`.
+// Whether `validate` can check the scene: AnalyticScene's scenes (homogeneous glass with enclosed
+// bubbles and particles), and GrinReference's (any index field; inhomogeneities). *why says why not.
+bool can_validate(const Scene& scene, std::string* why = nullptr);
+
+// Precondition: can_validate(scene). Traces validation_rays(scene, density) with `representation`
+// against AnalyticScene, or, for a scene with an index field or inhomogeneities, against
+// GrinReference (the rays then come from the same scene without them, its geometry alone),
+// with the tolerances of ValidationTolerance.h: the closed-form GRIN floor, or for TetGen-meshed
+// fields the first-order bound of the interpolated index (meshed_position_tolerance).
 ValidationReport validate(const Scene& scene, const Solid& solid, Representation representation, int density);
 
 std::string format_report(const ValidationReport& r, bool with_tolerance_verdict);
