@@ -15,6 +15,7 @@ const char* to_string(DefectType t) {
         case DefectType::Bubble: return "bubble";
         case DefectType::Scratch: return "scratch";
         case DefectType::Particle: return "particle";
+        case DefectType::Inhomogeneity: return "inhomogeneity";
     }
     return "?";
 }
@@ -148,6 +149,52 @@ void check_ellipsoid(const Lens& lens, const Defect& d, std::vector<DefectProble
     }
 }
 
+// An inhomogeneity must meet the glass; a uniform one (a sharp interface on its ellipsoid) must
+// lie strictly inside it, a smooth one may reach beyond a face (its region is clipped to the
+// glass). Its index must stay real and >= 1 (n_glass + delta_n at its centre is the extreme).
+void check_inhomogeneity(const Lens& lens, const Defect& d, std::vector<DefectProblem>& out) {
+    const char* size_key = d.is_sphere() ? "radius" : "semi_axes";
+    if (!is_finite(d.center)) {
+        out.push_back({"center", "must be three finite numbers"});
+        return;
+    }
+    if (!(d.semi_axes.x > 0 && d.semi_axes.y > 0 && d.semi_axes.z > 0) || !is_finite(d.semi_axes)) {
+        out.push_back({size_key, "must be positive and finite"});
+        return;
+    }
+    if (!std::isfinite(d.delta_n) || d.delta_n == 0) {
+        out.push_back({"delta_n", fmt::format("must be a finite, non-zero change of the index (got {})", d.delta_n)});
+        return;
+    }
+    const double n_peak = lens.spec().ior + d.delta_n;
+    if (n_peak < 1.0 - kIndexBelowOneSlack) {
+        out.push_back({"delta_n", fmt::format("makes n = {:g} + ({:g}) = {:g} < 1 at the inhomogeneity's centre",
+                                              lens.spec().ior, d.delta_n, n_peak)});
+        return;
+    }
+    const std::string where = fmt::format("({:g}, {:g}, {:g})", d.center.x, d.center.y, d.center.z);
+    const double sdf = lens.signed_distance(d.center);
+    if (d.index_profile == IndexProfile::Uniform) {
+        const double gap = ellipsoid_clearance(lens, d.center, d.frame, d.semi_axes);
+        if (gap <= 0)
+            out.push_back({"center", fmt::format("the uniform inhomogeneity at {} is not strictly inside the glass (it "
+                                                 "reaches {:.6g} mm beyond the {} face): a sharp inclusion must be "
+                                                 "enclosed; use profile: smooth to clip it to the glass",
+                                                 where, -gap, nearest_face(lens, d.center))});
+        return;
+    }
+    // A sphere meets the solid iff its centre is within one radius of it (exact); an ellipsoid is
+    // only accepted with its centre in the glass, which certainly meets it.
+    const bool meets = sdf > 0 || (d.is_sphere() && sdf > -d.semi_axes.x);
+    if (!meets)
+        out.push_back({"center", d.is_sphere() ? fmt::format("the inhomogeneity at {} does not meet the glass (its "
+                                                             "centre is {:.6g} mm outside, beyond its radius)",
+                                                             where, -sdf)
+                                               : fmt::format("the ellipsoidal inhomogeneity's centre {} must lie in "
+                                                             "the glass (it is {:.6g} mm outside)",
+                                                             where, -sdf)});
+}
+
 void check_scratch(const Lens& lens, const Defect& d, std::vector<DefectProblem>& out) {
     const char* face = d.side == 0 ? "front" : "back";
     if (!(d.width > 0) || !std::isfinite(d.width))
@@ -248,16 +295,27 @@ int cavity_normal_sign(const TriMesh& tool, int tag, const Surface& s) {
 
 DefectSolid make_ellipsoid(const Defect& d, int index, double tol, SurfaceTable& table, const Lens& lens) {
     DefectSolid out;
-    const bool particle = d.type == DefectType::Particle;
+    const bool particle = d.type == DefectType::Particle, inclusion = d.type == DefectType::Inhomogeneity;
     const Mat3 frame = d.is_sphere() ? sphere_frame(index) : d.frame;
     SurfaceInfo info;
     info.surface = d.is_sphere() ? Surface::sphere(d.center, d.semi_axes.x) : Surface::ellipsoid(d.center, d.frame, d.semi_axes);
-    info.name = fmt::format("{} {}", particle ? "particle" : (d.surface_breaking ? "pit" : "bubble"), index);
-    info.role = particle ? SurfaceRole::Particle : (d.surface_breaking ? SurfaceRole::Pit : SurfaceRole::Bubble);
     info.defect = index;
-    info.inside = particle ? Medium::Absorber : Medium::Glass;
-    info.outside = particle ? Medium::Glass : Medium::Air;
-    info.normal_sign = particle ? +1 : -1;  // a particle keeps its outward shell; a void is a reversed one
+    if (inclusion) {
+        // Glass of another index inside, the glass outside; an outward shell like a particle's.
+        // The smooth profile's boundary is not an optical interface (n is continuous there).
+        info.name = fmt::format("inhomogeneity {}", index);
+        info.role = SurfaceRole::Inhomogeneity;
+        info.inside = Medium::inclusion(index);
+        info.outside = Medium::Glass;
+        info.normal_sign = +1;
+        info.optical = d.index_profile == IndexProfile::Uniform;
+    } else {
+        info.name = fmt::format("{} {}", particle ? "particle" : (d.surface_breaking ? "pit" : "bubble"), index);
+        info.role = particle ? SurfaceRole::Particle : (d.surface_breaking ? SurfaceRole::Pit : SurfaceRole::Bubble);
+        info.inside = particle ? Medium::Absorber : Medium::Glass;
+        info.outside = particle ? Medium::Glass : Medium::Air;
+        info.normal_sign = particle ? +1 : -1;  // a particle keeps its outward shell; a void is a reversed one
+    }
     const int tag = table.add(info);
     EllipsoidTessellation t = tessellate_ellipsoid(d.center, frame, d.semi_axes, tol, tag);
     out.tool = std::move(t.mesh);
@@ -343,11 +401,63 @@ DefectSolid make_scratch(const Lens& lens, const Defect& d, int index, double to
 
 }  // namespace
 
-std::vector<DefectProblem> defect_problems(const Lens& lens, const Defect& d) {
+std::vector<DefectProblem> defect_problems(const Lens& lens, const Defect& d, const IndexField& field) {
     std::vector<DefectProblem> out;
+    if (field.graded()) {
+        if (d.type == DefectType::Inhomogeneity) {
+            out.push_back({"type", fmt::format("an inhomogeneity needs a homogeneous glass around it, but the object has "
+                                               "an index field ({}); give the glass a constant ior",
+                                               to_string(field.type))});
+            return out;
+        }
+        if (d.type == DefectType::Scratch || d.surface_breaking) {
+            out.push_back({"type", fmt::format("a {} cuts a face, which a graded-index object ({}) cannot have: its "
+                                               "curved paths are traced against the object's own faces and enclosed "
+                                               "defects only",
+                                               d.type == DefectType::Scratch ? "scratch" : "surface-breaking bubble",
+                                               to_string(field.type))});
+            return out;
+        }
+    }
     if (d.type == DefectType::Scratch) check_scratch(lens, d, out);
+    else if (d.type == DefectType::Inhomogeneity) check_inhomogeneity(lens, d, out);
     else check_ellipsoid(lens, d, out);
     return out;
+}
+
+Aabb defect_bounds(const Lens& lens, const Defect& d) {
+    Aabb box;
+    if (d.is_ellipsoid()) {
+        Vec3 h;
+        for (int i = 0; i < 3; ++i)
+            h[i] = std::sqrt(std::pow(d.frame(i, 0) * d.semi_axes.x, 2) + std::pow(d.frame(i, 1) * d.semi_axes.y, 2) +
+                             std::pow(d.frame(i, 2) * d.semi_axes.z, 2));
+        box.extend(d.center - h);
+        box.extend(d.center + h);
+        return box;
+    }
+    // The groove's cross-section reaches at most max(width, depth) from the path point on the
+    // face; consecutive samples of a path of curvature radius rc at most L apart leave a sag below
+    // L^2 / (8 rc) <= L (taken as is: the box only needs to contain the groove).
+    const ScratchPath path = scratch_path(lens, d);
+    const int n = 256;
+    const double step = path.path_length() / n;
+    const double reach = std::max(d.width, d.depth) + step;
+    for (int i = 0; i <= n; ++i) {
+        const Vec3 p = path.place(double(i) / n, {0.0, 0.0});
+        box.extend(p - Vec3{reach, reach, reach});
+        box.extend(p + Vec3{reach, reach, reach});
+    }
+    return box;
+}
+
+std::vector<DefectProblem> defect_pair_problems(const Lens& lens, const Defect& d, const Defect& other,
+                                                int other_index) {
+    if (d.type != DefectType::Inhomogeneity && other.type != DefectType::Inhomogeneity) return {};
+    if (!defect_bounds(lens, d).overlaps(defect_bounds(lens, other))) return {};
+    return {{"center", fmt::format("this {} overlaps defects[{}] (a {}): their bounding boxes intersect, and an "
+                                   "inhomogeneity may overlap no other defect",
+                                   to_string(d.type), other_index, to_string(other.type))}};
 }
 
 DefectSolid make_defect_solid(const Lens& lens, const Defect& d, int index, double tol, SurfaceTable& table) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "defects/Defect.h"
+#include "geometry/IndexField.h"
 #include "geometry/Lens.h"
 #include "geometry/SurfaceTable.h"
 #include "geometry/TriMesh.h"
@@ -16,7 +17,22 @@ namespace ltm {
 struct DefectProblem {
     std::string key, message;
 };
-std::vector<DefectProblem> defect_problems(const Lens& lens, const Defect& d);
+// `field` is the glass's index: an inhomogeneity needs a homogeneous glass around it, and a defect
+// that cuts a face (a scratch, an open pit) needs one too (graded-index paths are traced against
+// the object's exact faces and enclosed defects only, trace/GrinPath.h).
+std::vector<DefectProblem> defect_problems(const Lens& lens, const Defect& d, const IndexField& field = {});
+
+// Problems of defect `d` with an earlier defect `other` (index `other_index` in the scene): an
+// inhomogeneity may overlap no other defect (its field and the other's surfaces are traced
+// separately). Judged by bounding boxes, which is conservative: boxes that overlap are rejected
+// even where the shapes would not touch. Keys as for defect_problems ("center").
+std::vector<DefectProblem> defect_pair_problems(const Lens& lens, const Defect& d, const Defect& other,
+                                                int other_index);
+
+// An axis-aligned box containing the defect: exact for ellipsoids (the half-extent along world
+// axis i is sqrt(sum_j (F_ij e_j)^2)); for a scratch, its path sampled and widened by the groove's
+// reach and the sampling's chord sag.
+Aabb defect_bounds(const Lens& lens, const Defect& d);
 
 // Clearance of an ellipsoid (or sphere) from the glass boundary: the smallest gap between it and
 // any face, positive when it lies strictly inside the glass, <= 0 when it touches or crosses it.

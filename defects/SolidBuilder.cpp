@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "defects/DefectSolid.h"
+#include "defects/Inclusion.h"
 #include "geometry/Boolean.h"
 #include "geometry/Refine.h"
 #include "geometry/Tessellate.h"
@@ -25,6 +26,10 @@ SurfaceTable object_surfaces(const Lens& lens) {
 }
 
 namespace {
+
+bool smooth_inclusion(const Defect& d) {
+    return d.type == DefectType::Inhomogeneity && d.index_profile == IndexProfile::Smooth;
+}
 
 // Greedy grouping of tools whose bounding boxes do not overlap: each group is one corefinement
 // (CGAL needs the tool to be free of self-intersections, which disjoint components guarantee).
@@ -48,7 +53,83 @@ std::vector<std::vector<size_t>> disjoint_groups(const std::vector<Aabb>& boxes,
 
 }  // namespace
 
-Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt, StageReport* report) {
+namespace {
+
+// A smooth inclusion's TetGen region and its lattice, in units of its ellipsoid (index_region).
+constexpr double kRegionScale = 1.25, kLatticeScale = 1.12;
+
+// The mesh whose faces lie outside the surface they approximate: vertices pushed out along their
+// (area-weighted) normals by twice the chord error, so that a facet inscribed within e of a convex
+// surface clears it by at least e (a concave one is already outside).
+TriMesh circumscribed(TriMesh m, double chord_error) {
+    std::vector<Vec3> normal(m.vertices.size());
+    for (size_t f = 0; f < m.num_triangles(); ++f) {
+        const auto& t = m.triangles[f];
+        const Vec3 n = cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]);
+        for (auto v : t) normal[v] += n;
+    }
+    for (size_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] += normalize(normal[v]) * (2.0 * chord_error);
+    return m;
+}
+
+}  // namespace
+
+TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField& field, const MeshOptions& opt,
+                       const std::string& name) {
+    TetRegion r;
+    r.name = name;
+    r.tolerance = opt.index_tolerance;
+    // Tetrahedra whose enclosing ball misses the glass are dropped: no path inside the glass
+    // reaches them (the tracer meets the exact faces first).
+    r.keep = [lens](const Vec3& c, double radius) { return lens.signed_distance(c) > -radius; };
+    if (defect) {
+        const auto f = std::make_shared<InclusionField>(*defect, lens.spec().ior);
+        // The region: the ellipsoid scaled by kRegionScale, tessellated within 1 % of its smallest
+        // semi-axis (so the true ellipsoid, where the tracer hands paths over, lies well inside).
+        // The lattice (geometry/TetMesh.h) fills it out to rho = kLatticeScale, across the
+        // ellipsoid where the field's curvature jumps; beyond, where n is constant and linear
+        // interpolation exact, TetGen's unstructured layer along the boundary costs no accuracy.
+        const double emin = f->min_semi_axis(), tol = 0.01 * emin;
+        r.boundary = tessellate_ellipsoid(defect->center, defect->frame, defect->semi_axes * kRegionScale, tol, 0).mesh;
+        r.n2 = [f](const Vec3& x) { return f->n2(x); };
+        r.hessian_bound = [f](const Vec3& c, double radius) { return f->hessian_bound(c, radius); };
+        // rho is 1/e_min-Lipschitz: (kLatticeScale - rho) e_min is a lower bound of the depth below
+        // the ellipsoid rho = kLatticeScale.
+        r.depth = [f](const Vec3& x) { return (kLatticeScale - std::sqrt(f->s(x))) * f->min_semi_axis(); };
+        return r;
+    }
+    // linear_n: n^2 = (ior + k . x)^2 has the constant Hessian 2 k k^T, of norm 2 |k|^2.
+    const LensTessellation t = tessellate_lens(lens, opt.chord_tolerance, 0, 0, 0);
+    r.boundary = circumscribed(t.mesh, t.chord_error);
+    r.n2 = [field](const Vec3& x) { return field.n2(x); };
+    const double m = 2.0 * length2(field.gradient);
+    r.hessian_bound = [m](const Vec3&, double) { return m; };
+    r.depth = [lens](const Vec3& x) { return lens.signed_distance(x); };
+    return r;
+}
+
+// The triangle mesh and surface table (everything but the TetGen regions).
+static Solid build_surface_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt,
+                                 StageReport* report);
+
+Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt, StageReport* report,
+                  const IndexField& field) {
+    Solid s = build_surface_solid(lens, defects, opt, report);
+    for (size_t k = 0; k < defects.size(); ++k) {
+        const Defect& d = defects[k];
+        if (d.type != DefectType::Inhomogeneity || d.index_profile != IndexProfile::Smooth) continue;
+        s.regions.push_back(tetrahedralize(index_region(lens, &d, field, opt, fmt::format("defects[{}]", k)), report));
+        s.region_defect.push_back(static_cast<int>(k));
+    }
+    if (field.type == IndexFieldType::LinearN) {
+        s.regions.push_back(tetrahedralize(index_region(lens, nullptr, field, opt, "object"), report));
+        s.region_defect.push_back(-1);
+    }
+    return s;
+}
+
+static Solid build_surface_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt,
+                                 StageReport* report) {
     Solid s;
     s.surfaces = object_surfaces(lens);
 
@@ -71,7 +152,7 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
     for (size_t k = 0; k < defects.size(); ++k) {
         const Defect& d = defects[k];
         double tol = defect_tolerance(d, opt.chord_tolerance, opt.defect_relative_tolerance);
-        if (d.type != DefectType::Scratch && !d.surface_breaking) {
+        if (d.type != DefectType::Scratch && !d.surface_breaking && !smooth_inclusion(d)) {
             // An enclosed defect close to the boundary: both its tool and the object mesh near it
             // must be finer than a quarter of its clearance, so that the two inscribed meshes stay
             // at least half the clearance apart (each moves by at most its chord error).
@@ -109,12 +190,14 @@ Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const Me
         const double reach = std::max(0.0, tools[k].clearance) + 2.0 * eps_obj;
         near.lo -= Vec3{reach, reach, reach};
         near.hi += Vec3{reach, reach, reach};
-        if (defects[k].type == DefectType::Particle) {
+        if (smooth_inclusion(defects[k])) {
+            continue;  // no faces: the region is TetGen's (build_solid)
+        } else if (defects[k].type == DefectType::Particle || defects[k].type == DefectType::Inhomogeneity) {
             if (!clear)
                 throw std::invalid_argument(fmt::format(
-                    "defects[{}]: the particle touches another defect or lies within the tessellation's chord "
-                    "error of the glass boundary (clearance {:.3g} mm); particles must be separate from everything",
-                    k, tools[k].clearance));
+                    "defects[{}]: the {} touches another defect or lies within the tessellation's chord "
+                    "error of the glass boundary (clearance {:.3g} mm); it must be separate from everything",
+                    k, to_string(defects[k].type), tools[k].clearance));
             appended.append(tools[k].tool, /*flip=*/false);
         } else if (clear && !opt.always_boolean) {
             appended.append(tools[k].tool, /*flip=*/true);

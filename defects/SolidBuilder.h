@@ -5,8 +5,10 @@
 
 #include "defects/Defect.h"
 #include "geometry/Lens.h"
+#include "geometry/IndexField.h"
 #include "geometry/StageReport.h"
 #include "geometry/SurfaceTable.h"
+#include "geometry/TetMesh.h"
 #include "geometry/TriMesh.h"
 
 namespace ltm {
@@ -29,6 +31,10 @@ struct Solid {
     int enclosed_defects = 0;  // appended as reversed shells without a Boolean
     std::vector<bool> corefined;           // per defect: went through the Boolean (it cuts the glass)
     std::vector<double> tag_chord_error;   // per surface-table entry: bound on its faces' chord error, mm
+    // TetGen-meshed regions (geometry/TetMesh.h): one per smooth inhomogeneity (region_defect[i] =
+    // its defect index), or one for the whole object under a linear_n field (region_defect = -1).
+    std::vector<TetMesh> regions;
+    std::vector<int> region_defect;
 };
 
 // Tags 0, 1, 2 are always the front, back and rim.
@@ -42,8 +48,17 @@ SurfaceTable object_surfaces(const Lens& lens);
 // Defect-free: no Boolean runs. Defects whose clearance from the glass boundary and from every
 // other defect exceeds both tessellations' chord errors are appended as reversed shells: that is
 // the exact Boolean result, computed without corefinement. The rest are subtracted with CGAL in
-// groups of non-overlapping tools. Particles are appended as their own outward components.
+// groups of non-overlapping tools. Particles and uniform inhomogeneities are appended as their
+// own outward components. Smooth inhomogeneities add no faces (their boundary is no interface):
+// each becomes a TetGen region, meshed within options.index_tolerance, as does the whole object
+// under a linear_n `field`. No TetGen runs otherwise. Throws TetGenError naming the region.
 Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& options,
-                  StageReport* report = nullptr);
+                  StageReport* report = nullptr, const IndexField& field = IndexField{});
+
+// The TetGen region of a smooth inhomogeneity (its circumscribed ellipsoid, clipped to the glass)
+// or, with defect == nullptr, of the whole object under a linear_n field (its circumscribed
+// tessellation). `name` names it in errors.
+TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField& field, const MeshOptions& options,
+                       const std::string& name);
 
 }  // namespace ltm

@@ -14,11 +14,25 @@
 
 namespace ltm {
 
-enum class Medium : std::uint8_t { Air, Glass, Absorber };
-const char* to_string(Medium m);
+// A medium: an index into the scene's table of media (trace/Media.h says, per medium, its index of
+// refraction and how rays propagate through it). Three are always there; an inhomogeneity
+// defect k brings its own, Medium::inclusion(k).
+struct Medium {
+    std::uint16_t id = 0;
+    static const Medium Air, Glass, Absorber;
+    static constexpr Medium inclusion(int defect) { return Medium{static_cast<std::uint16_t>(3 + defect)}; }
+    constexpr bool operator==(Medium o) const { return id == o.id; }
+    constexpr bool operator!=(Medium o) const { return id != o.id; }
+    // The inhomogeneity defect this medium belongs to, or -1.
+    constexpr int defect() const { return id >= 3 ? id - 3 : -1; }
+};
+inline constexpr Medium Medium::Air{0};
+inline constexpr Medium Medium::Glass{1};
+inline constexpr Medium Medium::Absorber{2};
+std::string to_string(Medium m);  // "air", "glass", "absorber", "inhomogeneity 2"
 
 // What part of the object a surface belongs to; also picks its colour in exported meshes.
-enum class SurfaceRole : std::uint8_t { Front, Back, Rim, Bubble, Pit, Scratch, Particle };
+enum class SurfaceRole : std::uint8_t { Front, Back, Rim, Bubble, Pit, Scratch, Particle, Inhomogeneity };
 const char* to_string(SurfaceRole r);
 
 struct SurfaceInfo {
@@ -31,6 +45,9 @@ struct SurfaceInfo {
     // Reference-normal sign: +1 when the mesh's outward normal (inside -> outside) agrees with
     // Surface::normal, -1 when it is opposite (e.g. a bubble wall seen from the glass).
     int normal_sign = +1;
+    // false: the boundary of a smooth inhomogeneity, where the index is continuous. Rays cross it
+    // without refraction or reflection; only the way they propagate changes.
+    bool optical = true;
 };
 
 struct SurfaceTable {

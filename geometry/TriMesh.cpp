@@ -6,13 +6,11 @@
 
 namespace ltm {
 
-const char* to_string(Medium m) {
-    switch (m) {
-        case Medium::Air: return "air";
-        case Medium::Glass: return "glass";
-        case Medium::Absorber: return "absorber";
-    }
-    return "?";
+std::string to_string(Medium m) {
+    if (m == Medium::Air) return "air";
+    if (m == Medium::Glass) return "glass";
+    if (m == Medium::Absorber) return "absorber";
+    return "inhomogeneity " + std::to_string(m.defect());
 }
 
 const char* to_string(SurfaceRole r) {
@@ -24,6 +22,7 @@ const char* to_string(SurfaceRole r) {
         case SurfaceRole::Pit: return "pit";
         case SurfaceRole::Scratch: return "scratch";
         case SurfaceRole::Particle: return "particle";
+        case SurfaceRole::Inhomogeneity: return "inhomogeneity";
     }
     return "?";
 }
@@ -37,6 +36,7 @@ std::array<std::uint8_t, 3> role_colour(SurfaceRole r) {
         case SurfaceRole::Pit: return {250, 160, 40};
         case SurfaceRole::Scratch: return {200, 60, 200};
         case SurfaceRole::Particle: return {40, 40, 40};
+        case SurfaceRole::Inhomogeneity: return {90, 220, 220};
     }
     return {255, 255, 255};
 }

@@ -290,14 +290,15 @@ private:
 
     // Sections
     void parse_object(const Item& it, ObjectDesc& object, Where& where) const;
+    void parse_index_field(const Item& it, IndexField& field, Where& where) const;
     void check_object(const ObjectDesc& object, const Where& where, Loc object_loc) const;
     Defect parse_defect(const YAML::Node& node, const std::string& path, Where& where) const;
     void parse_ellipsoid_keys(const YAML::Node& map, const std::string& path, DefectType type, Defect& d,
                               Where& where) const;
     void parse_scratch_keys(const YAML::Node& map, const std::string& path, Defect& d, Where& where) const;
     void parse_arc(const Item& it, const std::string& path, Defect& d, Where& where) const;
-    void check_defect(const Lens& lens, const Defect& d, const std::string& path, const Where& where,
-                      Loc defect_loc) const;
+    void check_defect(const ObjectDesc& object, const std::vector<Defect>& defects, std::size_t index,
+                      const Where& where, Loc defect_loc) const;
     // [columns, rows] of positive integers; [width, height] of positive lengths (mm).
     std::array<int, 2> resolution(const YAML::Node& v, Loc at, const std::string& p) const {
         const auto xs = number_list(v, at, p, {2}, "positive integers [columns, rows]",
@@ -483,8 +484,10 @@ Vec3 Parser::point23(const Item& it, const std::string& path, bool& has_z) const
 // ---------------------------------------------------------------------------------------------
 // The object
 
-const std::vector<std::string> kLensKeys{"type", "r1", "r2", "center_thickness", "diameter", "ior", "rim", "absorption"};
-const std::vector<std::string> kWindowKeys{"type", "thickness", "diameter", "ior", "rim", "absorption"};
+const std::vector<std::string> kLensKeys{"type", "r1", "r2", "center_thickness", "diameter", "ior", "rim", "absorption",
+                                         "index_field"};
+const std::vector<std::string> kWindowKeys{"type", "thickness", "diameter", "ior", "rim", "absorption", "index_field"};
+const std::vector<std::string> kSphereKeys{"type", "radius", "ior", "absorption", "index_field"};
 
 void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) const {
     const std::string path = "object";
@@ -492,21 +495,25 @@ void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) cons
     const auto items = items_of(it.value);
     const Item* type_item = find_item(items, "type");
     if (!type_item) fail(loc_of(it.value), "object.type", "missing required key 'type'");
-    const bool window = choice(type_item->value, type_item->value_loc(), "object.type", {"lens", "window"}) == 1;
-    object.type = window ? ObjectType::Window : ObjectType::Lens;
+    const std::size_t kind = choice(type_item->value, type_item->value_loc(), "object.type", {"lens", "window", "sphere"});
+    const bool window = kind == 1, sphere = kind == 2;
+    object.type = sphere ? ObjectType::Sphere : (window ? ObjectType::Window : ObjectType::Lens);
     object.lens = LensSpec{};
 
     KeyRule rule;
-    rule.keys = window ? kWindowKeys : kLensKeys;
-    rule.context = window ? " for a window" : " for a lens";
-    if (window)
-        rule.hint = [](const std::string& k) -> std::optional<std::string> {
-            if (k == "r1" || k == "r2")
-                return std::string(": windows have flat faces (use type: lens for curved faces); valid keys are: ") +
-                       join_keys(kWindowKeys);
-            return std::nullopt;
-        };
+    rule.keys = sphere ? kSphereKeys : (window ? kWindowKeys : kLensKeys);
+    rule.context = sphere ? " for a sphere" : (window ? " for a window" : " for a lens");
+    rule.hint = [window, sphere, keys = rule.keys](const std::string& k) -> std::optional<std::string> {
+        if (window && (k == "r1" || k == "r2"))
+            return std::string(": windows have flat faces (use type: lens for curved faces); valid keys are: ") +
+                   join_keys(keys);
+        if (sphere && (k == "r1" || k == "r2" || k == "diameter" || k == "center_thickness" || k == "thickness"))
+            return std::string(": a sphere is given by its radius alone; valid keys are: ") + join_keys(keys);
+        if (sphere && k == "rim") return std::string(": a sphere has no rim; valid keys are: ") + join_keys(keys);
+        return std::nullopt;
+    };
 
+    double radius = 0;
     walk(it.value, path, rule, [&](const Item& e) {
         const std::string p = join_path(path, e.key);
         const Loc at = e.value_loc();
@@ -520,6 +527,8 @@ void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) cons
             object.lens.center_thickness = number(e.value, at, p);
         } else if (e.key == "diameter") {
             object.lens.diameter = number(e.value, at, p);
+        } else if (e.key == "radius") {
+            radius = number(e.value, at, p);
         } else if (e.key == "ior") {
             object.lens.ior = number(e.value, at, p);
         } else if (e.key == "rim") {
@@ -529,23 +538,98 @@ void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) cons
             const double a = number(e.value, at, p);
             if (!(a >= 0)) fail(at, p, fmt::format("must be >= 0 (1/mm), got {}", e.value.Scalar()));
             object.absorption = a;
+        } else if (e.key == "index_field") {
+            parse_index_field(e, object.index_field, where);
         }
     });
-    if (window) {
+    if (sphere) {
+        require_keys(it.value, path, where, {"radius", "ior"});
+        object.lens = ball_spec(radius, object.lens.ior);
+    } else if (window) {
         require_keys(it.value, path, where, {"thickness", "diameter", "ior"});
         object.lens.r1 = object.lens.r2 = std::numeric_limits<double>::infinity();
     } else {
         require_keys(it.value, path, where, {"r1", "r2", "center_thickness", "diameter", "ior"});
     }
+    object.index_field.ior = object.lens.ior;
+}
+
+// object.index_field: {type: linear_n2 | radial_n2 | spherical_n2 | quadratic_n2 | linear_n, ...}
+// (geometry/IndexField.h). Positions of its keys go into `where` as "index_field.<key>".
+void Parser::parse_index_field(const Item& it, IndexField& f, Where& where) const {
+    const std::string path = "object.index_field";
+    require_map(it, path);
+    const auto items = items_of(it.value);
+    const Item* type_item = find_item(items, "type");
+    if (!type_item) fail(loc_of(it.value), path + ".type", "missing required key 'type'");
+    const std::vector<std::string> kinds{"linear_n2", "radial_n2", "spherical_n2", "quadratic_n2", "linear_n"};
+    const std::size_t kind = choice(type_item->value, type_item->value_loc(), path + ".type", kinds);
+    const IndexFieldType types[] = {IndexFieldType::LinearN2, IndexFieldType::RadialN2, IndexFieldType::SphericalN2,
+                                    IndexFieldType::QuadraticN2, IndexFieldType::LinearN};
+    f = IndexField{};
+    f.type = types[kind];
+    KeyRule rule;
+    switch (f.type) {
+        case IndexFieldType::RadialN2:
+        case IndexFieldType::SphericalN2: rule.keys = {"type", "g"}; break;
+        case IndexFieldType::QuadraticN2: rule.keys = {"type", "gradient", "hessian"}; break;
+        default: rule.keys = {"type", "gradient"}; break;
+    }
+    rule.context = " for an index field of type " + kinds[kind];
+    Where local;
+    walk(it.value, path, rule, [&](const Item& e) {
+        const std::string p = join_path(path, e.key);
+        const Loc at = e.value_loc();
+        local[e.key] = at;
+        where["index_field." + e.key] = at;
+        if (e.key == "g") {
+            f.g = number(e.value, at, p);
+        } else if (e.key == "gradient") {
+            f.gradient = vec3(e, p, "numbers [gx, gy, gz]");
+        } else if (e.key == "hessian") {
+            const bool rows_ok = e.value.IsSequence() && e.value.size() == 3;
+            if (!rows_ok)
+                fail(at, p, fmt::format("expected a list of 3 rows of 3 numbers [[..], [..], [..]], got {}",
+                                        describe(e.value)));
+            for (std::size_t r = 0; r < 3; ++r) {
+                const YAML::Node row = e.value[r];
+                const std::string rp = fmt::format("{}[{}]", p, r);
+                const auto xs = number_list(row, row.IsNull() ? at : loc_of(row), rp, {3}, "numbers (a row of the hessian)",
+                                            [&](const YAML::Node& x, Loc l, const std::string& q) { return number(x, l, q); });
+                for (std::size_t c = 0; c < 3; ++c) f.hessian(static_cast<int>(r), static_cast<int>(c)) = xs[c];
+            }
+        }
+    });
+    if (f.type == IndexFieldType::QuadraticN2) require_keys(it.value, path, local, {"hessian"});
+    else if (f.type == IndexFieldType::RadialN2 || f.type == IndexFieldType::SphericalN2)
+        require_keys(it.value, path, local, {"g"});
+    else
+        require_keys(it.value, path, local, {"gradient"});
+    where["index_field"] = it.value_loc();
 }
 
 void Parser::check_object(const ObjectDesc& object, const Where& where, Loc object_loc) const {
+    auto located = [&](const std::string& key) {
+        for (std::string k = key; !k.empty();) {
+            const auto w = where.find(k);
+            if (w != where.end()) return w->second;
+            const auto cut = k.find_last_of(".[");
+            if (cut == std::string::npos) break;
+            k = k.substr(0, cut);
+        }
+        return object_loc;
+    };
     const auto problems = Lens::problems(object.lens);
-    if (problems.empty()) return;
-    std::string key = problems.front().key;
-    if (object.type == ObjectType::Window && key == "center_thickness") key = "thickness";
-    const auto w = where.find(key);
-    fail(w != where.end() ? w->second : object_loc, join_path("object", key), problems.front().message);
+    if (!problems.empty()) {
+        std::string key = problems.front().key;
+        if (object.type == ObjectType::Window && key == "center_thickness") key = "thickness";
+        fail(located(key), join_path("object", key), problems.front().message);
+    }
+    if (!object.index_field.graded()) return;
+    const auto field_problems = index_field_problems(Lens(object.lens), object.index_field);
+    if (field_problems.empty()) return;
+    const std::string key = field_problems.front().key.empty() ? "index_field" : "index_field." + field_problems.front().key;
+    fail(located(key), join_path("object", key), field_problems.front().message);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -553,37 +637,50 @@ void Parser::check_object(const ObjectDesc& object, const Where& where, Loc obje
 
 const std::vector<std::string> kBubbleKeys{"type", "center", "radius", "semi_axes", "rotation", "surface_breaking"};
 const std::vector<std::string> kParticleKeys{"type", "center", "radius", "semi_axes", "rotation"};
+const std::vector<std::string> kInhomogeneityKeys{"type", "center", "radius", "semi_axes", "rotation", "delta_n", "profile"};
 const std::vector<std::string> kScratchKeys{"type", "surface", "width", "depth", "profile", "start", "end", "arc"};
 const std::vector<std::string> kArcKeys{"center", "radius", "start_angle", "end_angle"};
 
 Defect Parser::parse_defect(const YAML::Node& node, const std::string& path, Where& where) const {
     if (!node.IsMap())
         fail(loc_of(node), path,
-             fmt::format("expected a mapping with a 'type' key (bubble, scratch or particle), got {}", describe(node)));
+             fmt::format("expected a mapping with a 'type' key (bubble, scratch, particle or inhomogeneity), got {}",
+                         describe(node)));
     const auto items = items_of(node);
     const Item* type_item = find_item(items, "type");
     if (!type_item) fail(loc_of(node), join_path(path, "type"), "missing required key 'type'");
     Defect d;
-    switch (choice(type_item->value, type_item->value_loc(), join_path(path, "type"), {"bubble", "scratch", "particle"})) {
+    switch (choice(type_item->value, type_item->value_loc(), join_path(path, "type"),
+                   {"bubble", "scratch", "particle", "inhomogeneity"})) {
         case 0: parse_ellipsoid_keys(node, path, DefectType::Bubble, d, where); break;
         case 1: parse_scratch_keys(node, path, d, where); break;
-        default: parse_ellipsoid_keys(node, path, DefectType::Particle, d, where); break;
+        case 2: parse_ellipsoid_keys(node, path, DefectType::Particle, d, where); break;
+        default: parse_ellipsoid_keys(node, path, DefectType::Inhomogeneity, d, where); break;
     }
     return d;
 }
 
 void Parser::parse_ellipsoid_keys(const YAML::Node& map, const std::string& path, DefectType type, Defect& d,
                                   Where& where) const {
-    const bool bubble = type == DefectType::Bubble;
+    const bool bubble = type == DefectType::Bubble, inclusion = type == DefectType::Inhomogeneity;
     d.type = type;
     KeyRule rule;
-    rule.keys = bubble ? kBubbleKeys : kParticleKeys;
-    rule.context = bubble ? " for a bubble" : " for a particle";
-    rule.hint = [bubble, keys = rule.keys](const std::string& k) -> std::optional<std::string> {
-        if (!bubble && k == "surface_breaking")
+    rule.keys = bubble ? kBubbleKeys : (inclusion ? kInhomogeneityKeys : kParticleKeys);
+    rule.context = bubble ? " for a bubble" : (inclusion ? " for an inhomogeneity" : " for a particle");
+    rule.hint = [bubble, inclusion, keys = rule.keys](const std::string& k) -> std::optional<std::string> {
+        if (!bubble && !inclusion && k == "surface_breaking")
             return std::string(": particles always lie strictly inside the glass (a surface-breaking void is a "
                                "bubble); valid keys are: ") +
                    join_keys(keys);
+        if (inclusion && k == "surface_breaking")
+            return std::string(": an inhomogeneity is clipped to the glass where it reaches a face; valid keys are: ") +
+                   join_keys(keys);
+        if (k == "index_field")
+            return std::string(": index_field is a key of the object (the glass's index as a field); a defect "
+                               "changes the index locally as type inhomogeneity with delta_n; valid keys are: ") +
+                   join_keys(keys);
+        if (!inclusion && (k == "delta_n"))
+            return fmt::format(" ({} is a key of inhomogeneities); valid keys are: {}", k, join_keys(keys));
         if (std::find(kScratchKeys.begin(), kScratchKeys.end(), k) != kScratchKeys.end())
             return fmt::format(" ({} is a key of scratches); valid keys are: {}", k, join_keys(keys));
         return std::nullopt;
@@ -611,9 +708,17 @@ void Parser::parse_ellipsoid_keys(const YAML::Node& map, const std::string& path
             rotation = vec3(e, p, "angles in degrees [rx, ry, rz]");
         } else if (e.key == "surface_breaking") {
             d.surface_breaking = boolean(e.value, at, p);
+        } else if (e.key == "delta_n") {
+            d.delta_n = number(e.value, at, p);
+            if (d.delta_n == 0)
+                fail(at, p, "must be non-zero: delta_n = 0 leaves the glass unchanged (remove the defect instead)");
+        } else if (e.key == "profile") {
+            d.index_profile = choice(e.value, at, p, {"smooth", "uniform"}) == 0 ? IndexProfile::Smooth
+                                                                                  : IndexProfile::Uniform;
         }
     });
-    require_keys(map, path, where, {"center"});
+    require_keys(map, path, where, inclusion ? std::vector<std::string>{"center", "delta_n"}
+                                             : std::vector<std::string>{"center"});
     if (!where.count("radius") && !where.count("semi_axes"))
         fail(loc_of(map), path, "missing required key 'radius' (a sphere) or 'semi_axes' (an ellipsoid)");
     if (where.count("rotation") && where.count("radius"))
@@ -712,9 +817,14 @@ void Parser::parse_arc(const Item& it, const std::string& path, Defect& d, Where
     d.end_angle = end;
 }
 
-void Parser::check_defect(const Lens& lens, const Defect& d, const std::string& path, const Where& where,
-                          Loc defect_loc) const {
-    const auto problems = defect_problems(lens, d);
+void Parser::check_defect(const ObjectDesc& object, const std::vector<Defect>& defects, std::size_t index,
+                          const Where& where, Loc defect_loc) const {
+    const Lens lens(object.lens);
+    const Defect& d = defects[index];
+    const std::string path = fmt::format("defects[{}]", index);
+    auto problems = defect_problems(lens, d, object.index_field);
+    for (std::size_t j = 0; j < index && problems.empty(); ++j)
+        problems = defect_pair_problems(lens, d, defects[j], static_cast<int>(j));
     if (problems.empty()) return;
     std::string key = problems.front().key;
     // An arc scratch's centre and radius live in its `arc` mapping.
@@ -802,7 +912,7 @@ void Parser::parse_mesh(const Item& it, MeshOptions& mesh) const {
     const std::string path = "mesh";
     require_map(it, path);
     KeyRule rule;
-    rule.keys = {"chord_tolerance", "defect_relative_tolerance", "always_boolean"};
+    rule.keys = {"chord_tolerance", "defect_relative_tolerance", "always_boolean", "index_tolerance"};
     walk(it.value, path, rule, [&](const Item& e) {
         const std::string p = join_path(path, e.key);
         const Loc at = e.value_loc();
@@ -814,6 +924,10 @@ void Parser::parse_mesh(const Item& it, MeshOptions& mesh) const {
             mesh.defect_relative_tolerance = r;
         } else if (e.key == "always_boolean") {
             mesh.always_boolean = boolean(e.value, at, p);
+        } else if (e.key == "index_tolerance") {
+            const double t = number(e.value, at, p);
+            if (!(t > 0 && t <= 0.1)) fail(at, p, fmt::format("must be in (0, 0.1] (a tolerance on n^2), got {}", e.value.Scalar()));
+            mesh.index_tolerance = t;
         }
     });
 }
@@ -845,9 +959,7 @@ Scene Parser::run(const YAML::Node& root) {
     bool display_z_given = false;
     std::vector<PendingDefect> pending;
     auto check_pending = [&] {
-        const Lens lens(scene.object.lens);
-        for (const auto& p : pending)
-            check_defect(lens, scene.defects[p.index], fmt::format("defects[{}]", p.index), p.where, p.loc);
+        for (const auto& p : pending) check_defect(scene.object, scene.defects, p.index, p.where, p.loc);
         pending.clear();
     };
 

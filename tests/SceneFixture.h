@@ -1,6 +1,6 @@
 // A scene and its solid from YAML text, for tests that trace or validate a scene written inline:
-// parse_scene (scene/SceneLoader.h) and then build_solid (defects/SolidBuilder.h) of the scene's
-// lens, defects and mesh options, as `ltmsim` does for a scene file.
+// parse_scene (scene/SceneLoader.h) and then build_solid (scene/SceneSolid.h) of the scene's
+// object, index field, defects and mesh options, as `ltmsim` does for a scene file.
 #pragma once
 
 #include <string>
@@ -9,6 +9,7 @@
 #include "geometry/Lens.h"
 #include "scene/Scene.h"
 #include "scene/SceneLoader.h"
+#include "scene/SceneSolid.h"
 
 namespace ltm::test {
 
@@ -22,7 +23,7 @@ struct Built {
 inline Built build(const std::string& yaml, const std::string& file_name = "test.yaml") {
     Built b;
     b.scene = parse_scene(yaml, file_name);
-    b.solid = build_solid(Lens(b.scene.object.lens), b.scene.defects, b.scene.mesh);
+    b.solid = build_solid(b.scene);
     return b;
 }
 

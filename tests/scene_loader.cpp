@@ -76,7 +76,7 @@ TEST(SceneLoaderUnknownKey, LensThicknessSuggestsCenterThickness) {
 TEST(SceneLoaderUnknownKey, WindowRadiusSaysWindowsAreFlat) {
     EXPECT_EQ(error_of("object:\n  type: window\n  thickness: 5\n  r1: 50\n"),
               "scene.yaml:4:3: object.r1: unknown key 'r1' for a window: windows have flat faces (use type: lens "
-              "for curved faces); valid keys are: type, thickness, diameter, ior, rim, absorption");
+              "for curved faces); valid keys are: type, thickness, diameter, ior, rim, absorption, index_field");
 }
 
 TEST(SceneLoaderUnknownKey, WindowCenterThicknessSuggestsThickness) {
@@ -189,9 +189,9 @@ TEST(SceneLoaderWrongType, BooleanMustBeTrueOrFalse) {
 
 TEST(SceneLoaderWrongType, UnknownChoiceSuggestsTheNearest) {
     EXPECT_EQ(error_of("object:\n  type: lense\n"),
-              "scene.yaml:2:9: object.type: expected lens or window, got 'lense' (did you mean 'lens'?)");
+              "scene.yaml:2:9: object.type: expected lens, window or sphere, got 'lense' (did you mean 'lens'?)");
     EXPECT_EQ(error_of(kLens + "defects:\n  - {type: bubbel}\n"),
-              "scene.yaml:9:12: defects[0].type: expected bubble, scratch or particle, got 'bubbel' (did you mean "
+              "scene.yaml:9:12: defects[0].type: expected bubble, scratch, particle or inhomogeneity, got 'bubbel' (did you mean "
               "'bubble'?)");
 }
 

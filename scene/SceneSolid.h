@@ -1,0 +1,19 @@
+#pragma once
+// The object solid of a scene: its tagged mesh, surface table and TetGen regions, built from the
+// scene's object (with its index field), defects and mesh options (defects/SolidBuilder.h).
+#include "defects/SolidBuilder.h"
+#include "scene/Scene.h"
+
+namespace ltm {
+
+inline Solid build_solid(const Scene& scene, StageReport* report = nullptr) {
+    return build_solid(Lens(scene.object.lens), scene.defects, scene.mesh, report, scene.object.index_field);
+}
+
+// The same object without its defects (the reference the deflection map is measured against).
+inline Scene defect_free(Scene scene) {
+    scene.defects.clear();
+    return scene;
+}
+
+}  // namespace ltm
