@@ -18,6 +18,7 @@
 #include "features/Contrast.h"
 #include "features/Image.h"
 #include "features/Plot.h"
+#include "scene/SceneSolid.h"
 #include "trace/LtmFile.h"
 #include "trace/Render.h"
 
@@ -179,9 +180,8 @@ int run(const ExperimentArgs& a) {
     for (const auto& r : runs) {
         const Scene& scene = r.loaded.scene;
         if (scene.defects.empty()) continue;
-        Scene free_scene = scene;
-        free_scene.defects.clear();
-        const Solid free_solid = build_solid(Lens(free_scene.object.lens), {}, free_scene.mesh);
+        const Scene free_scene = defect_free(scene);
+        const Solid free_solid = build_solid(free_scene);
         TracerOptions fo;
         fo.representation = Representation::Analytic;
         const Tracer free(free_scene, free_solid, fo);

@@ -12,6 +12,7 @@
 #include "features/Plot.h"
 #include "app/Commands.h"
 #include "scene/SceneJson.h"
+#include "scene/SceneSolid.h"
 #include "trace/LtmFile.h"
 
 namespace ltm::app {
@@ -43,11 +44,14 @@ std::string stats_json(const PathStats& s) {
         "\"total_internal_reflections\": {}, \"absorbed_by_particles\": {}, \"absorbed_by_rim\": {}, "
         "\"on_display\": {}, \"off_display\": {}, \"toward_camera\": {}, \"roulette_kills\": {}, \"truncated\": {}, "
         "\"nan_events\": {}, \"spurious_candidates\": {}, \"guard_hits\": {}, \"leak_retries\": {}, "
-        "\"leaks_unresolved\": {}, \"display_weight\": {}, \"lost_weight\": {}, \"absorbed_weight\": {}}}",
+        "\"leaks_unresolved\": {}, \"grin_segments\": {}, \"grin_evaluations\": {}, \"tet_crossings\": {}, "
+        "\"lost\": {}, \"hamiltonian_violations\": {}, \"walk_boundary_exits\": {}, "
+        "\"display_weight\": {}, \"lost_weight\": {}, \"absorbed_weight\": {}}}",
         s.paths, s.segments, json_number(s.paths ? double(s.segments) / double(s.paths) : 0.0), s.reflections,
         s.transmissions, s.tir, s.absorbed_particle, s.absorbed_rim, s.on_display, s.off_display, s.toward_camera,
         s.roulette_kills, s.truncated, s.nan_events, s.spurious_candidates, s.guard_hits, s.leak_retries,
-        s.leaks_unresolved, json_number(s.display_weight), json_number(s.lost_weight), json_number(s.absorbed_weight));
+        s.leaks_unresolved, s.grin_segments, s.grin_evaluations, s.tet_crossings, s.lost, s.hamiltonian_violations,
+        s.walk_boundary_exits, json_number(s.display_weight), json_number(s.lost_weight), json_number(s.absorbed_weight));
 }
 
 }  // namespace
@@ -104,9 +108,8 @@ std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& ow
                                          const RenderOptions& options) {
     CsrMatrix free_T;
     if (!scene.defects.empty()) {
-        Scene free = scene;
-        free.defects.clear();
-        const Solid free_solid = build_solid(Lens(free.object.lens), {}, free.mesh);
+        const Scene free = defect_free(scene);
+        const Solid free_solid = build_solid(free);
         TracerOptions o;
         o.representation = representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
         free_T = render(Tracer(free, free_solid, o), options).T;

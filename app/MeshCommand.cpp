@@ -1,4 +1,8 @@
-// `ltmsim mesh SCENE -o FILE.{ply,obj,off}`: the object with its defects, for MeshLab.
+// `ltmsim mesh SCENE -o FILE.{ply,obj,off}`: the object with its defects, for MeshLab; with
+// TetGen-meshed index regions also FILE.vtu (the tetrahedra with n per vertex, for ParaView and
+// meshio), and the regions' boundaries appended to the surface mesh.
+#include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fmt/format.h>
 #include <iostream>
@@ -7,6 +11,7 @@
 #include "app/SceneSetup.h"
 #include "defects/SolidBuilder.h"
 #include "geometry/MeshExport.h"
+#include "geometry/VtuExport.h"
 
 namespace ltm::app {
 
@@ -19,13 +24,60 @@ struct MeshArgs {
 };
 
 std::string stats_json(const Scene& scene, const Solid& solid, const StageReport& report) {
+    size_t tetrahedra = 0;
+    for (const TetMesh& r : solid.regions) tetrahedra += r.num_tets();
     return fmt::format(
         "{{\n  \"scene\": \"{}\",\n  \"triangles\": {},\n  \"vertices\": {},\n  \"surfaces\": {},\n"
         "  \"object_chord_error_mm\": {:.6g},\n  \"max_defect_chord_error_mm\": {:.6g},\n"
-        "  \"boolean_operations\": {},\n  \"enclosed_defects\": {},\n  \"stages\": {}\n}}\n",
+        "  \"boolean_operations\": {},\n  \"enclosed_defects\": {},\n  \"tetrahedra\": {},\n  \"stages\": {}\n}}\n",
         scene.source, solid.mesh.num_triangles(), solid.mesh.num_vertices(), solid.surfaces.size(),
         solid.object_chord_error, solid.max_defect_chord_error, solid.boolean_operations, solid.enclosed_defects,
-        report.to_json());
+        tetrahedra, report.to_json());
+}
+
+// The boundary faces of a tetrahedral mesh (faces without a neighbour), wound outward.
+TriMesh region_boundary(const TetMesh& m, int tag) {
+    TriMesh out;
+    std::vector<std::uint32_t> id(m.vertices.size(), UINT32_MAX);
+    auto vertex = [&](std::uint32_t v) {
+        if (id[v] == UINT32_MAX) id[v] = out.add_vertex(m.vertices[v]);
+        return id[v];
+    };
+    for (size_t t = 0; t < m.tets.size(); ++t)
+        for (int i = 0; i < 4; ++i) {
+            if (m.neighbors[t][static_cast<size_t>(i)] >= 0) continue;
+            std::array<std::uint32_t, 3> f{};
+            for (int j = 0, k = 0; j < 4; ++j)
+                if (j != i) f[static_cast<size_t>(k++)] = m.tets[t][static_cast<size_t>(j)];
+            const Vec3& a = m.vertices[f[0]];
+            const Vec3 n = cross(m.vertices[f[1]] - a, m.vertices[f[2]] - a);
+            if (dot(n, m.vertices[m.tets[t][static_cast<size_t>(i)]] - a) > 0) std::swap(f[1], f[2]);
+            out.add_triangle(vertex(f[0]), vertex(f[1]), vertex(f[2]), tag);
+        }
+    return out;
+}
+
+// All regions in one mesh (their vertices and tetrahedra renumbered one after the other).
+TetMesh merged(const std::vector<TetMesh>& regions) {
+    TetMesh all;
+    for (const TetMesh& r : regions) {
+        const auto base = static_cast<std::uint32_t>(all.vertices.size());
+        const auto tbase = static_cast<std::int32_t>(all.tets.size());
+        all.vertices.insert(all.vertices.end(), r.vertices.begin(), r.vertices.end());
+        all.n2.insert(all.n2.end(), r.n2.begin(), r.n2.end());
+        for (size_t t = 0; t < r.tets.size(); ++t) {
+            auto v = r.tets[t];
+            for (auto& x : v) x += base;
+            all.tets.push_back(v);
+            auto nb = r.neighbors[t];
+            for (auto& x : nb)
+                if (x >= 0) x += tbase;
+            all.neighbors.push_back(nb);
+        }
+        all.error_bound = std::max(all.error_bound, r.error_bound);
+    }
+    all.name = "regions";
+    return all;
 }
 
 int run(const MeshArgs& a) {
@@ -54,13 +106,28 @@ int run(const MeshArgs& a) {
     const Solid& solid = loaded->solid;
     {
         StageTimer t(&report, "write");
-        write_mesh(a.output, solid.mesh, solid.surfaces, format);
-        t.done(a.output);
+        // The smooth inhomogeneities' regions as their own components, tagged with their surface
+        // (a picture of where the field is meshed; the whole-object region is the object itself).
+        TriMesh picture = solid.mesh;
+        for (size_t i = 0; i < solid.regions.size(); ++i) {
+            const int k = solid.region_defect[i];
+            if (k < 0) continue;
+            for (size_t tag = 0; tag < solid.surfaces.size(); ++tag)
+                if (solid.surfaces[static_cast<int>(tag)].defect == k)
+                    picture.append(region_boundary(solid.regions[i], static_cast<int>(tag)));
+        }
+        write_mesh(a.output, picture, solid.surfaces, format);
+        if (!solid.regions.empty()) {
+            const std::string vtu = std::filesystem::path(a.output).replace_extension(".vtu").string();
+            write_vtu(vtu, merged(solid.regions));
+            t.done(a.output + ", " + vtu);
+        } else {
+            t.done(a.output);
+        }
     }
     if (!a.stats.empty()) write_text_atomically(a.stats, stats_json(scene, solid, report));
     if (a.verbose) {
-        std::cerr << fmt::format("ltmsim mesh {} -> {}\n", a.scene, a.output) << report.to_text();
-        if (!report.ran("boolean")) std::cerr << "  (no Boolean ran)\n";
+        std::cerr << fmt::format("ltmsim mesh {} -> {}\n", a.scene, a.output) << verbose_stages(report);
     }
     return 0;
 }

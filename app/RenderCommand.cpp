@@ -137,7 +137,7 @@ int run(const RenderArgs& a) {
         std::cerr << "ltmsim render: " << e.what() << "\n";
         return 1;
     }
-    if (a.verbose) std::cerr << fmt::format("ltmsim render {} -> {}\n", a.scene, a.dir) << report.to_text();
+    if (a.verbose) std::cerr << fmt::format("ltmsim render {} -> {}\n", a.scene, a.dir) << verbose_stages(report);
     if (r.stats.nan_events > 0) std::cerr << fmt::format("warning: {} paths produced a NaN (see run.json)\n", r.stats.nan_events);
     return 0;
 }

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "scene/SceneLoader.h"
+#include "scene/SceneSolid.h"
 
 namespace ltm::app {
 
@@ -20,12 +21,23 @@ std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageRe
         return std::nullopt;
     }
     try {
-        out.solid = build_solid(Lens(out.scene.object.lens), out.scene.defects, out.scene.mesh, &report);
+        out.solid = build_solid(out.scene, &report);
     } catch (const std::invalid_argument& e) {
         std::cerr << fmt::format("{}: {}\n", out.scene.source, e.what());
         status = 2;
         return std::nullopt;
+    } catch (const TetGenError& e) {
+        std::cerr << fmt::format("{}: {}\n", out.scene.source, e.what());
+        status = 2;
+        return std::nullopt;
     }
+    return out;
+}
+
+std::string verbose_stages(const StageReport& report) {
+    std::string out = report.to_text();
+    if (!report.ran("boolean")) out += "  (no Boolean ran)\n";
+    if (!report.ran("tetgen")) out += "  (no TetGen ran)\n";
     return out;
 }
 

@@ -18,6 +18,10 @@ struct LoadedScene {
 // On bad input prints the message to stderr, sets `status` to 2 and returns nothing.
 std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status);
 
+// The stages that ran (--verbose), then what did not run: "(no Boolean ran)" for a scene whose
+// defects cut nothing, "(no TetGen ran)" for one without a meshed index region.
+std::string verbose_stages(const StageReport& report);
+
 // True if `dir`'s parent folder exists (the folder itself may be created); else prints why.
 bool output_folder_ok(const std::string& command, const std::string& dir);
 

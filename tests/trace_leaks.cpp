@@ -102,7 +102,7 @@ TEST(Watertight, NoRayLeaksThroughVerticesOrEdges) {
                 if (std::getenv("LTM_LEAK_DEBUG") && leaks < 12)
                     std::printf("leak: o=(%.17g,%.17g,%.17g) d=(%.17g,%.17g,%.17g) target tag %d (%s) p=(%.9g,%.9g,%.9g) medium %s found %d t=%.9g reach %.9g hit tag %d th=%.3f e=%.3g\n", o.x, o.y, o.z, d.x, d.y, d.z,
                                 tg.tag, solid.surfaces[tg.tag].name.c_str(), tg.p.x, tg.p.y, tg.p.z,
-                                to_string(tracer.medium_at(o)), h.found, h.t, reach, h.tag, th, e);
+                                to_string(tracer.medium_at(o)).c_str(), h.found, h.t, reach, h.tag, th, e);
             }
             // Raw Embree on the same mesh: a leak is a miss or a hit beyond the aimed-at point.
             const long hit = tracer.embree().raw_intersect(o, d, 0.0f);

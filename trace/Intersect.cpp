@@ -1,5 +1,7 @@
 #include "trace/Intersect.h"
 
+#include "trace/TraceTolerance.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -127,7 +129,7 @@ double point_error_bound(const Surface& s, const Vec3& p) {
     const double mag = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
                        std::max({std::fabs(s.origin.x), std::fabs(s.origin.y), std::fabs(s.origin.z)}) + s.radius +
                        s.minor_radius + std::max({s.semi_axes.x, s.semi_axes.y, s.semi_axes.z});
-    return std::fabs(s.signed_distance(p)) + 64.0 * u * mag;
+    return std::fabs(s.signed_distance(p)) + trace_tol::kPointErrorUlps * u * mag;
 }
 
 }  // namespace ltm

@@ -37,6 +37,10 @@ inline bool segment_near(const Patch& p, const Vec3& o, const Vec3& d, double tm
 // The front, back and rim patches of a lens, tagged 0, 1, 2 (SolidBuilder's kTagFront...).
 std::vector<Patch> object_patches(const Lens& lens);
 
+// Whether a point of the patch's full surface lies on the patch (the caps' aperture and branch,
+// the rim's height; always for a closed patch), with the slack of finalize().
+bool on_patch(const Patch& p, const Vec3& x);
+
 // The smallest root t in (tmin, tmax) of the ray o + t d (d unit) on the patch, or +inf.
 // Boundary tests (rho <= a, z in [z_lo, z_hi]) allow a few ulps so that a ray through a seam is
 // caught by at least one of the two patches meeting there.

@@ -8,14 +8,23 @@
 
 #include "trace/Intersect.h"
 #include "trace/Optics.h"
+#include "trace/TraceTolerance.h"
 
 namespace ltm {
 
 namespace {
-constexpr double kFloatUlp = 1.0 / (1 << 23);  // relative spacing of floats
+using trace_tol::kFloatUlp;
 // Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
-// test each) instead of querying Embree's BVH, whose call overhead is larger.
+// test each) instead of querying Embree's BVH, whose call overhead is larger (measured, not a
+// tolerance).
 constexpr size_t kLinearScanLimit = 16;
+
+// The same analytic surface (a ball's front and back hemispheres lie on one sphere).
+bool same_surface(const Surface& a, const Surface& b) {
+    return a.kind == b.kind && a.origin == b.origin && a.axis == b.axis && a.radius == b.radius &&
+           a.minor_radius == b.minor_radius && a.angle == b.angle && a.semi_axes == b.semi_axes &&
+           a.frame == b.frame;
+}
 }
 
 const char* to_string(Representation r) {
@@ -45,17 +54,27 @@ void PathStats::merge(const PathStats& o) {
     guard_hits += o.guard_hits;
     leak_retries += o.leak_retries;
     leaks_unresolved += o.leaks_unresolved;
+    grin_segments += o.grin_segments;
+    grin_evaluations += o.grin_evaluations;
+    tet_crossings += o.tet_crossings;
+    lost += o.lost;
+    hamiltonian_violations += o.hamiltonian_violations;
+    walk_boundary_exits += o.walk_boundary_exits;
     display_weight += o.display_weight;
     lost_weight += o.lost_weight;
     absorbed_weight += o.absorbed_weight;
 }
 
-// One interface crossing found by next_hit: the exact point, its surface and the unit normal
-// pointing from the surface's `inside` medium to its `outside`.
+// One interface crossing found by propagate: the exact point, its surface, the unit normal
+// pointing from the surface's `inside` medium to its `outside`, and how the ray arrived there.
 struct Tracer::Hit {
     bool found = false;
-    double t = INFINITY;
+    bool lost = false;      // a curved path in a closed medium found no exit
+    double t = INFINITY;    // the segment's parameter: distance (straight) or tau (curved)
+    double length = 0;      // arc length travelled (Beer-Lambert)
     Vec3 p, n_out;
+    Vec3 d_in;              // unit direction arriving at p
+    double n_from = 1;      // the current medium's index at p
     int tag = -1;
     std::uint32_t prim = 0;
     bool triangle = false;
@@ -121,6 +140,29 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
         p.finalize();
         ellipsoids.push_back(p);
     }
+    ellipsoids_ = ellipsoids;
+    media_ = std::make_unique<MediaTable>(scene, solid, object_patches_, ellipsoids_);
+    if (media_->graded()) {
+        if (options_.representation == Representation::MeshOnly)
+            throw std::invalid_argument(
+                "the mesh-only representation traces straight segments against facets; a graded-index glass or a "
+                "smooth inhomogeneity needs the exact surfaces (use refined or analytic)");
+        if (const GrinField* field = (*media_)[Medium::Glass].grin) {
+            auto add = [&](const Patch& p) {
+                for (CurvedSurface& c : curved_surfaces_)
+                    if (same_surface(c.patches.front().surface, p.surface)) {
+                        c.patches.push_back(p);
+                        return;
+                    }
+                curved_surfaces_.push_back({CurvedQuadric(*field, Quadric::from(p.surface)), {p}});
+            };
+            for (const Patch& p : object_patches_) add(p);
+            for (const Patch& p : ellipsoids_) add(p);
+            for (const CurvedSurface& c : curved_surfaces_)
+                general_surfaces_ = general_surfaces_ || c.quadric.form() == CurvedQuadric::Form::General;
+            horizon_ = std::make_unique<CurvedQuadric>(*field, Quadric::from(Surface::sphere({0, 0, 0}, field->radius() * 1.001)));
+        }
+    }
     switch (options_.representation) {
         case Representation::Analytic: {
             std::string why;
@@ -158,7 +200,19 @@ bool Tracer::analytic_supported(const Solid& solid, std::string* why) {
     return true;
 }
 
-double Tracer::index_of(Medium m) const { return m == Medium::Glass ? scene_.object.lens.ior : 1.0; }
+double Tracer::index_at(Medium m, const Vec3& x) const {
+    const MediumInfo& info = (*media_)[m];
+    switch (info.propagation) {
+        case Propagation::Straight: return info.index;
+        case Propagation::Grin: return std::sqrt(std::max(info.grin->n2(x), 0.0));
+        case Propagation::TetWalk: {
+            const int t = info.walk->locate(x);
+            return t < 0 ? NAN : std::sqrt(std::max(info.walk->n2(t, x), 0.0));
+        }
+        case Propagation::Absorbing: return 1.0;
+    }
+    return NAN;
+}
 
 Medium Tracer::medium_at(const Vec3& p) const {
     if (!lens_.contains(p)) return Medium::Air;
@@ -169,8 +223,10 @@ Medium Tracer::medium_at(const Vec3& p) const {
         if (d.type == DefectType::Scratch) continue;
         const Vec3 y = d.frame.transposed() * (p - d.center);
         const Vec3& e = d.semi_axes;
-        if ((y.x / e.x) * (y.x / e.x) + (y.y / e.y) * (y.y / e.y) + (y.z / e.z) * (y.z / e.z) < 1.0)
+        if ((y.x / e.x) * (y.x / e.x) + (y.y / e.y) * (y.y / e.y) + (y.z / e.z) * (y.z / e.z) < 1.0) {
+            if (d.type == DefectType::Inhomogeneity) return Medium::inclusion(static_cast<int>(k));
             return d.type == DefectType::Particle ? Medium::Absorber : Medium::Air;
+        }
     }
     return Medium::Glass;
 }
@@ -223,7 +279,7 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
             for (int i = 0; i < r.count; ++i) {
                 const double t = r.t[i];
                 if (!(t > 0 && t < (best.t < tmax ? best.t : tmax))) continue;
-                const double delta = 1e-9 * (std::fabs(t) + scale_);
+                const double delta = trace_tol::kGuardStep * (std::fabs(t) + scale_);
                 if (c.shape.contains(o + d * (t - delta)) == c.shape.contains(o + d * (t + delta))) continue;
                 const Vec3 x = o + d * t;
                 if (!lens_.contains(x) && lens_.signed_distance(x) < -delta) continue;
@@ -237,79 +293,105 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
     return best;
 }
 
-Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
+Tracer::Hit Tracer::on_surface(Hit h) const {
+    const SurfaceInfo& s = solid_.surfaces[h.tag];
+    h.n_out = s.surface.normal(h.p) * static_cast<double>(s.normal_sign);
+    h.offset = trace_tol::kSpawnOffsetBounds * point_error_bound(s.surface, h.p);
+    h.found = true;
+    return h;
+}
+
+Tracer::Hit Tracer::propagate(const State& st, PathStats& stats) const {
+    const MediumInfo& m = (*media_)[st.medium];
+    switch (m.propagation) {
+        case Propagation::Grin: return grin_hit(st, m, stats);
+        case Propagation::TetWalk: return walk_hit(st, m, stats);
+        default: break;
+    }
+    Hit h = straight_hit(st, stats);
+    h.d_in = st.d;
+    h.length = h.t;
+    h.n_from = m.index;
+    return h;
+}
+
+Tracer::Hit Tracer::straight_hit(const State& st, PathStats& stats) const {
     if (st.escaped) return {};
+    switch (options_.representation) {
+        case Representation::Analytic: return analytic_hit(st);
+        case Representation::MeshOnly: return mesh_only_hit(st);
+        case Representation::Refined: break;
+    }
+    return refined_hit(st, stats);
+}
+
+Tracer::Hit Tracer::analytic_hit(const State& st) const {
     const Vec3& o = st.o;
     const Vec3& d = st.d;
-    const SurfaceTable& table = solid_.surfaces;
-    auto finish = [&](Hit h) {
-        const SurfaceInfo& s = table[h.tag];
-        h.p = o + d * h.t;
-        h.n_out = s.surface.normal(h.p) * static_cast<double>(s.normal_sign);
-        h.offset = 2.0 * point_error_bound(s.surface, h.p);
-        h.found = true;
-        return h;
-    };
-
-    if (options_.representation == Representation::Analytic) {
-        Hit h;
-        for (const Patch& p : object_patches_) {
+    Hit h;
+    for (const Patch& p : object_patches_) {
+        const double t = patch_hit(p, o, d, 0.0, h.t);
+        if (t < h.t) {
+            h.t = t;
+            h.tag = p.tag;
+        }
+    }
+    if (user_patches_.size() <= kLinearScanLimit) {
+        // A handful of defects: a box test each beats the cost of a BVH query.
+        for (const Patch& p : user_patches_) {
+            if (!segment_near(p, o, d, h.t)) continue;
             const double t = patch_hit(p, o, d, 0.0, h.t);
             if (t < h.t) {
                 h.t = t;
                 h.tag = p.tag;
             }
         }
-        if (user_patches_.size() <= kLinearScanLimit) {
-            // A handful of defects: a box test each beats the cost of a BVH query.
-            for (const Patch& p : user_patches_) {
-                if (!segment_near(p, o, d, h.t)) continue;
-                const double t = patch_hit(p, o, d, 0.0, h.t);
-                if (t < h.t) {
-                    h.t = t;
-                    h.tag = p.tag;
-                }
-            }
-        } else {
-            const Candidate c = embree_->intersect(o, d, 0.0, h.t);
-            if (c.hit && c.t < h.t) {
-                h.t = c.t;
-                h.tag = c.tag;
-            }
+    } else {
+        const Candidate c = embree_->intersect(o, d, 0.0, h.t);
+        if (c.hit && c.t < h.t) {
+            h.t = c.t;
+            h.tag = c.tag;
         }
-        if (h.tag < 0) return {};
-        return finish(h);
     }
+    if (h.tag < 0) return {};
+    h.p = o + d * h.t;
+    return on_surface(h);
+}
 
-    if (options_.representation == Representation::MeshOnly) {
-        const std::uint32_t skip[1] = {st.skip_prim};
-        const Candidate c = embree_->intersect(o, d, 0.0, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
-        if (!c.hit) return {};
-        Hit h;
-        h.found = true;
-        h.t = c.t;
-        h.tag = c.tag;
-        h.prim = c.prim;
-        h.triangle = true;
-        h.p = o + d * c.t;
-        h.n_out = face_normals_[c.prim];
-        // The float hit's error: a few float ulps of the coordinates involved.
-        const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
-        h.offset = 8.0 * kFloatUlp * mag;
-        return h;
-    }
+Tracer::Hit Tracer::mesh_only_hit(const State& st) const {
+    const Vec3& o = st.o;
+    const Vec3& d = st.d;
+    const std::uint32_t skip[1] = {st.skip_prim};
+    const Candidate c = embree_->intersect(o, d, 0.0, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
+    if (!c.hit) return {};
+    Hit h;
+    h.found = true;
+    h.t = c.t;
+    h.tag = c.tag;
+    h.prim = c.prim;
+    h.triangle = true;
+    h.p = o + d * c.t;
+    h.n_out = face_normals_[c.prim];
+    // The float hit's error: a few float ulps of the coordinates involved.
+    const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
+    h.offset = trace_tol::kMeshOnlyOffsetUlps * kFloatUlp * mag;
+    return h;
+}
 
-    // Refined.
+Tracer::Hit Tracer::refined_hit(const State& st, PathStats& stats) const {
+    const Vec3& o = st.o;
+    const Vec3& d = st.d;
+    const SurfaceTable& table = solid_.surfaces;
     Vec3 b1, b2;
     orthonormal_basis(d, b1, b2);
-    const double omag = std::max({std::fabs(o.x), std::fabs(o.y), std::fabs(o.z), 1e-3 * scale_});
+    const double omag = std::max({std::fabs(o.x), std::fabs(o.y), std::fabs(o.z), trace_tol::kOriginFloor * scale_});
     Hit last_inconsistent;
-    for (int attempt = 0; attempt < 6; ++attempt) {
+    for (int attempt = 0; attempt < trace_tol::kLeakRetries; ++attempt) {
         if (attempt > 0) ++stats.leak_retries;
         // A jittered candidate ray, a few float ulps off the true one, steps past a vertex or
         // edge the true ray slipped through; the hit is still solved for the true ray.
-        const double jitter = attempt == 0 ? 0.0 : 16.0 * attempt * kFloatUlp * omag;
-        const double ang = 2.399963229728653 * attempt;  // golden angle: a new direction each time
+        const double jitter = attempt == 0 ? 0.0 : trace_tol::kJitterUlps * attempt * kFloatUlp * omag;
+        const double ang = trace_tol::kGoldenAngle * attempt;  // a new direction each time
         const Vec3 oq = o + (b1 * std::cos(ang) + b2 * std::sin(ang)) * jitter;
         Hit best;
         double tmin = 0;
@@ -317,11 +399,12 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
             const std::uint32_t skip[1] = {st.skip_prim};
             const Candidate c = embree_->intersect(oq, d, tmin, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
             if (!c.hit) break;
+            const double step_past = trace_tol::kCandidateStepUlps * kFloatUlp * (omag + c.t);
             if (c.analytic) {
                 // An enclosed ellipsoid, solved exactly for the jittered ray: re-solve for the true one.
                 const double tt = patch_hit(user_patches_[c.prim], o, d, 0.0, INFINITY);
                 if (std::isinf(tt)) {
-                    tmin = c.t + 4.0 * kFloatUlp * (omag + c.t);
+                    tmin = c.t + step_past;
                     continue;
                 }
                 best.t = tt;
@@ -334,8 +417,9 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
             const Surface& S = table[c.tag].surface;
             const Roots roots = c.tag < static_cast<int>(object_patches_.size()) ? Roots{} : intersect(S, o, d);
             const double cosf = std::fabs(dot(d, face_normals_[c.prim]));
-            const double window = 2.0 * solid_.tag_chord_error[static_cast<size_t>(c.tag)] / std::max(cosf, 1e-3) +
-                                  16.0 * kFloatUlp * (omag + c.t);
+            const double window = 2.0 * solid_.tag_chord_error[static_cast<size_t>(c.tag)] /
+                                      std::max(cosf, trace_tol::kCandidateMinCos) +
+                                  trace_tol::kCandidateFloatUlps * kFloatUlp * (omag + c.t);
             double te = INFINITY;
             if (c.tag < static_cast<int>(object_patches_.size())) {
                 // The object's own faces: a root counts only on the patch (within the aperture, on
@@ -364,7 +448,7 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
             }
             // A facet the true surface does not reach here: step past it.
             ++stats.spurious_candidates;
-            tmin = c.t + 4.0 * kFloatUlp * (omag + c.t);
+            tmin = c.t + step_past;
         }
         // The exact guard: the glass boundary solved analytically along the segment. A nearer
         // crossing than the mesh's candidate means the mesh leaked or strayed from the surface.
@@ -378,7 +462,8 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
             if (st.medium == Medium::Air) return {};
             continue;
         }
-        Hit h = finish(best);
+        best.p = o + d * best.t;
+        Hit h = on_surface(best);
         const SurfaceInfo& s = table[h.tag];
         const Medium from = dot(d, h.n_out) < 0 ? s.outside : s.inside;
         if (from == st.medium) return h;
@@ -386,6 +471,82 @@ Tracer::Hit Tracer::next_hit(const State& st, PathStats& stats) const {
     }
     ++stats.leaks_unresolved;
     return last_inconsistent;
+}
+
+// A closed-form graded-index segment (GrinPath.h): the first crossing of every exact surface the
+// glass is bounded by, each on its patch, along the path from the spawned point with |p| = n there.
+Tracer::Hit Tracer::grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const {
+    ++stats.grin_segments;
+    const GrinField& field = *m.grin;
+    const double n0 = std::sqrt(std::max(field.n2(st.o), 0.0));
+    const GrinPath path(field, st.o, st.d * n0);
+    Hit h;
+    long evals = 0;
+    if (general_surfaces_) h.t = horizon_->first_crossing(path, 0.0, INFINITY, nullptr, 0, nullptr, &evals);
+    for (const CurvedSurface& s : curved_surfaces_) {
+        int which = 0;
+        const double t = s.quadric.first_crossing(path, 0.0, h.t, s.patches.data(), static_cast<int>(s.patches.size()),
+                                                  &which, &evals);
+        if (t < h.t) {
+            h.t = t;
+            h.tag = s.patches[static_cast<size_t>(which)].tag;
+        }
+    }
+    stats.grin_evaluations += static_cast<std::uint64_t>(evals);
+    if (h.tag < 0) {
+        h.lost = true;
+        return h;
+    }
+    Vec3 r, p;
+    path.state(h.t, r, p);
+    const double n2 = field.n2(r);
+    if (std::fabs(length2(p) - n2) > trace_tol::kHamiltonianRelative * field.n2_max()) ++stats.hamiltonian_violations;
+    h.p = r;
+    h.d_in = normalize(p);
+    h.n_from = std::sqrt(std::max(n2, 0.0));
+    if (scene_.object.absorption > 0) h.length = path.arc_length(h.t);
+    return on_surface(h);
+}
+
+// A segment through a TetGen region (TetWalk.h), from the tetrahedron holding the spawned point.
+Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const {
+    const TetWalk& w = *m.walk;
+    Hit h;
+    const int tet = w.locate(st.o);
+    if (tet < 0) {
+        h.lost = true;
+        return h;
+    }
+    const double n0 = std::sqrt(std::max(w.n2(tet, st.o), 0.0));
+    const TetWalk::Exit ex = w.walk(st.o, st.d * n0, tet, scene_.object.absorption > 0);
+    stats.tet_crossings += static_cast<std::uint64_t>(ex.crossings);
+    if (ex.kind == TetWalk::Exit::Kind::Stuck) {
+        h.lost = true;
+        return h;
+    }
+    if (ex.kind == TetWalk::Exit::Kind::Boundary) {
+        // Out of the region without meeting its exact ellipsoid (rounding at the handover): an
+        // inclusion's path continues in the glass around it; a whole-object region has no way out
+        // but its exact faces.
+        ++stats.walk_boundary_exits;
+        const int handover = st.medium.defect();
+        if (handover < 0) {
+            h.lost = true;
+            return h;
+        }
+        for (const Patch& p : w.surfaces())
+            if (solid_.surfaces[p.tag].defect == handover) h.tag = p.tag;
+    } else {
+        h.tag = w.surfaces()[static_cast<size_t>(ex.surface)].tag;
+    }
+    const double n2 = w.n2(ex.tet, ex.r);
+    if (std::fabs(length2(ex.p) - n2) > trace_tol::kHamiltonianRelative * std::max(n2, 1.0)) ++stats.hamiltonian_violations;
+    h.t = ex.tau;
+    h.p = ex.r;
+    h.d_in = normalize(ex.p);
+    h.n_from = std::sqrt(std::max(n2, 0.0));
+    h.length = ex.arc;
+    return on_surface(h);
 }
 
 template <bool Principal>
@@ -400,69 +561,85 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
             st.weight = 0;
             return;
         }
-        const Hit h = next_hit(st, stats);
+        const Hit h = propagate(st, stats);
         ++stats.segments;
+        if (h.lost) {
+            ++stats.lost;
+            stats.lost_weight += st.weight;
+            if (rec) rec->lost = true;
+            st.weight = 0;
+            return;
+        }
         if (!h.found) return;  // escaped: the caller looks for the display
-        if (!is_finite(h.p) || !is_finite(h.n_out)) {
+        if (!is_finite(h.p) || !is_finite(h.n_out) || !is_finite(h.d_in) || !std::isfinite(h.n_from)) {
             ++stats.nan_events;
             if (rec) rec->nan = true;
             st.weight = 0;
             return;
         }
-        if (st.medium == Medium::Glass && alpha > 0) {
-            const double keep = std::exp(-alpha * h.t);  // Beer-Lambert over the glass segment
+        if (alpha > 0 && (*media_)[st.medium].attenuates) {
+            const double keep = std::exp(-alpha * h.length);  // Beer-Lambert over the (curved) segment
             stats.absorbed_weight += st.weight * (1 - keep);
             st.weight *= keep;
         }
-        if (rec) {
-            rec->vertices.push_back(h.p);
-            rec->tags.push_back(h.tag);
-        }
         const SurfaceInfo& s = table[h.tag];
-        const bool entering = dot(st.d, h.n_out) < 0;  // crossing from `outside` into `inside`
+        const Vec3& d_in = h.d_in;
+        const bool entering = dot(d_in, h.n_out) < 0;  // crossing from `outside` into `inside`
         const Medium from = entering ? s.outside : s.inside;
         const Medium to = entering ? s.inside : s.outside;
-        if (to == Medium::Absorber) {
-            ++stats.absorbed_particle;
-            stats.absorbed_weight += st.weight;
-            if (rec) rec->absorbed = true;
-            st.weight = 0;
-            return;
-        }
-        if (s.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) {
-            ++stats.absorbed_rim;
-            stats.absorbed_weight += st.weight;
-            if (rec) rec->absorbed = true;
-            st.weight = 0;
-            return;
-        }
         const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
-        const double eta = index_of(from) / index_of(to);
-        const double cos_i = -dot(st.d, nf);
-        const FresnelResult F = fresnel(cos_i, eta);
-        bool reflect_it;
-        if (F.total_internal_reflection) {
-            reflect_it = true;
-            ++stats.tir;
-            if (rec) ++rec->tir;
-        } else if (Principal) {
-            reflect_it = false;
-        } else {
-            reflect_it = rng->uniform() < F.reflectance;
-        }
         Vec3 nd;
-        if (reflect_it) {
-            nd = reflect(st.d, nf);
-            if (!F.total_internal_reflection) ++stats.reflections;
-        } else {
-            nd = refract(st.d, nf, eta, cos_i, F.cos_t);
+        if (!s.optical) {
+            // A smooth inhomogeneity's boundary: the index is continuous, so the ray keeps its
+            // direction and only changes how it propagates.
+            nd = d_in;
             st.medium = to;
-            st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
-                         from == Medium::Glass && to == Medium::Air;
-            ++stats.transmissions;
-            if (rec) rec->transmission *= 1.0 - F.reflectance;
+        } else {
+            if (rec) {
+                rec->vertices.push_back(h.p);
+                rec->tags.push_back(h.tag);
+            }
+            if (to == Medium::Absorber) {
+                ++stats.absorbed_particle;
+                stats.absorbed_weight += st.weight;
+                if (rec) rec->absorbed = true;
+                st.weight = 0;
+                return;
+            }
+            if (s.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) {
+                ++stats.absorbed_rim;
+                stats.absorbed_weight += st.weight;
+                if (rec) rec->absorbed = true;
+                st.weight = 0;
+                return;
+            }
+            // The local indices on both sides of the interface.
+            const double eta = h.n_from / index_at(to, h.p);
+            const double cos_i = -dot(d_in, nf);
+            const FresnelResult F = fresnel(cos_i, eta);
+            bool reflect_it;
+            if (F.total_internal_reflection) {
+                reflect_it = true;
+                ++stats.tir;
+                if (rec) ++rec->tir;
+            } else if (Principal) {
+                reflect_it = false;
+            } else {
+                reflect_it = rng->uniform() < F.reflectance;
+            }
+            if (reflect_it) {
+                nd = reflect(d_in, nf);
+                if (!F.total_internal_reflection) ++stats.reflections;
+            } else {
+                nd = refract(d_in, nf, eta, cos_i, F.cos_t);
+                st.medium = to;
+                st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
+                             from == Medium::Glass && to == Medium::Air;
+                ++stats.transmissions;
+                if (rec) rec->transmission *= 1.0 - F.reflectance;
+            }
+            nd = normalize(nd);
         }
-        nd = normalize(nd);
         if (!is_finite(nd)) {
             ++stats.nan_events;
             if (rec) rec->nan = true;
@@ -475,7 +652,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
         // to the offset); near-tangent directions fall back to the normal offset.
         const double cos_new = std::fabs(dot(nd, nf));
         const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
-        st.o = cos_new > 1e-3 ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
+        st.o = cos_new > trace_tol::kSpawnMinCos ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
         st.d = nd;
         st.skip = h.triangle;
         st.skip_prim = h.prim;
@@ -485,7 +662,8 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
             const double e = options_.representation == Representation::MeshOnly
                                  ? 0.0
                                  : solid_.tag_chord_error[static_cast<size_t>(h.tag)];
-            st.skip_until = (4.0 * e + 64.0 * kFloatUlp * scale_) / std::max(std::fabs(dot(nd, nf)), 1e-3);
+            st.skip_until = (trace_tol::kSkipChords * e + trace_tol::kSkipFloatUlps * kFloatUlp * scale_) /
+                            std::max(std::fabs(dot(nd, nf)), trace_tol::kCandidateMinCos);
         }
         if (!Principal && depth + 1 >= options_.rr_depth) {
             if (rng->uniform() >= options_.rr_survival) {
@@ -503,7 +681,7 @@ Tracer::FirstHit Tracer::first_hit(const Vec3& origin, const Vec3& direction, Me
     st.o = origin;
     st.d = normalize_any(direction);
     st.medium = medium;
-    const Hit h = next_hit(st, stats);
+    const Hit h = propagate(st, stats);
     FirstHit f;
     f.found = h.found;
     f.t = h.t;
@@ -525,7 +703,7 @@ PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) 
     }
     run<true>(st, nullptr, stats, &rec);
     rec.direction = st.d;
-    if (!rec.absorbed && !rec.truncated && !rec.nan && st.medium == Medium::Air && st.d.z > 0) {
+    if (!rec.absorbed && !rec.truncated && !rec.nan && !rec.lost && st.medium == Medium::Air && st.d.z > 0) {
         const double t = (display_.z - st.o.z) / st.d.z;
         if (t > 0) {
             rec.x = st.o.x + t * st.d.x;

@@ -1,7 +1,14 @@
 #pragma once
 // Paths of rays of sight from the camera through the object to the display.
 //
-// Three representations of the object (TracerOptions::representation):
+// One integrator loop (Tracer::run): the medium the ray is in (trace/Media.h) propagates it to the
+// next interface by its own step (straight segments, closed-form graded-index paths, or a walk
+// through tetrahedra); at the interface the shared optics decide: Fresnel reflection or
+// transmission with the local indices on both sides, Snell's law, total internal reflection,
+// absorption; the spawn logic moves the new ray off the surface. The boundary of a smooth
+// inhomogeneity is no optical interface: it only hands the path to the other medium's step.
+//
+// Straight segments have three representations of the object (TracerOptions::representation):
 //  - Refined: Embree proposes candidate hits on the tagged triangle mesh; each is refined in
 //    double precision to the exact analytic surface its tag names (the mesh only says *which*
 //    surface is next). The object's own front, back and rim patches are also intersected exactly
@@ -14,10 +21,12 @@
 //    its enclosed ellipsoid defects are Embree user geometry intersected exactly in the callback.
 //    Only for scenes whose defects neither touch a face nor each other (no Boolean).
 //  - MeshOnly: the triangle hit and the facet normal, no refinement: the baseline for the
-//    error-vs-time comparison.
+//    error-vs-time comparison (homogeneous media only).
+// Curved paths always meet the exact surfaces (the object's patches, enclosed ellipsoids).
 //
 // Spawned rays start from the hit point moved off the surface by a bound on the point's error
-// (Intersect.h, point_error_bound) along the normal, on the side the new direction goes to.
+// (Intersect.h, point_error_bound) along the new direction, on the side it goes to; every
+// numerical constant is derived in trace/TraceTolerance.h.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -28,6 +37,7 @@
 #include "scene/Scene.h"
 #include "trace/Camera.h"
 #include "trace/EmbreeScene.h"
+#include "trace/Media.h"
 #include "trace/Patch.h"
 #include "trace/Rng.h"
 
@@ -50,6 +60,11 @@ struct PathStats {
     std::uint64_t absorbed_particle = 0, absorbed_rim = 0, on_display = 0, off_display = 0, toward_camera = 0;
     std::uint64_t roulette_kills = 0, truncated = 0, nan_events = 0;
     std::uint64_t spurious_candidates = 0, guard_hits = 0, leak_retries = 0, leaks_unresolved = 0;
+    // Curved paths: segments traced through a graded-index medium, path evaluations of the closed
+    // forms, tetrahedra crossed, paths that found no exit (lost), |p|^2 != n^2 beyond
+    // TraceTolerance's bound, walks that left their region other than through an exact surface.
+    std::uint64_t grin_segments = 0, grin_evaluations = 0, tet_crossings = 0, lost = 0;
+    std::uint64_t hamiltonian_violations = 0, walk_boundary_exits = 0;
     double display_weight = 0, lost_weight = 0, absorbed_weight = 0;
     void merge(const PathStats& o);
 };
@@ -58,7 +73,7 @@ struct PrincipalPath {
     std::vector<Vec3> vertices;
     std::vector<int> tags;
     Vec3 direction;
-    bool absorbed = false, truncated = false, nan = false;
+    bool absorbed = false, truncated = false, nan = false, lost = false;
     bool display_hit = false;
     double x = 0, y = 0;
     int p = -1, q = -1;
@@ -102,13 +117,26 @@ public:
     // The medium at a point (air outside the object and inside voids).
     Medium medium_at(const Vec3& p) const;
 
+    const MediaTable& media() const { return *media_; }
+
 private:
     struct Hit;
     struct State;
-    Hit next_hit(const State& st, PathStats& stats) const;
+    // The next interface from the ray's state, by its medium's propagation.
+    Hit propagate(const State& st, PathStats& stats) const;
+    // Straight segments, by representation.
+    Hit straight_hit(const State& st, PathStats& stats) const;
+    Hit analytic_hit(const State& st) const;
+    Hit refined_hit(const State& st, PathStats& stats) const;
+    Hit mesh_only_hit(const State& st) const;
+    // Curved segments.
+    Hit grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
+    Hit walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
+    Hit on_surface(Hit h) const;  // the normal and spawn offset of an exact hit at h.p
     template <bool Principal>
     void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record) const;
-    double index_of(Medium m) const;
+    // The index of medium m at point x (a field's local value).
+    double index_at(Medium m, const Vec3& x) const;
 
     const Scene& scene_;
     const Solid& solid_;
@@ -117,7 +145,20 @@ private:
     Display display_;
     TelecentricCamera camera_;
     std::vector<Patch> object_patches_;   // the exact guard (Refined)
-    std::vector<Patch> user_patches_;     // user geometry (Analytic)
+    std::vector<Patch> ellipsoids_;       // enclosed ellipsoid defects (bubbles, particles, inclusions)
+    std::vector<Patch> user_patches_;     // user geometry (Analytic, Refined): the ellipsoids
+    std::unique_ptr<MediaTable> media_;
+    // The surfaces a closed-form graded-index path can meet, as quadrics for its root finder.
+    // Patches of the same surface (a ball's two hemispheres) share one quadric and one solve.
+    struct CurvedSurface {
+        CurvedQuadric quadric;  // as the glass's field sees it
+        std::vector<Patch> patches;
+    };
+    std::vector<CurvedSurface> curved_surfaces_;
+    // The object's bounding sphere: every path in the glass crosses its boundary before it, so its
+    // first crossing bounds the search of surfaces whose crossings take no closed form.
+    std::unique_ptr<CurvedQuadric> horizon_;
+    bool general_surfaces_ = false;
     // Defects that cut the glass (through the Boolean), with their exact solids and the surface
     // tags bounding them: the guard classifies crossings of these along each segment.
     struct Cutter {
