@@ -88,7 +88,7 @@ struct Rendered {
 Rendered render_scene(const std::string& file, const std::string& label, const std::string& out, int threads) {
     StageReport report;
     int status = 0;
-    auto loaded = load_scene_and_solid(file, report, status);
+    auto loaded = load_scene_and_solid(file, report, status, /*surfaces_only=*/true);
     if (!loaded) throw std::invalid_argument("bad scene " + file);
     Rendered r;
     r.label = label;
@@ -108,31 +108,43 @@ Rendered render_scene(const std::string& file, const std::string& label, const s
     return r;
 }
 
-// Camera pixels whose centre ray (axial, through the defect-free object) passes within `inner`
-// .. `outer` mm of point c in the plane z = c.z; pixels outside 0.95 of the clear aperture are
-// left out (the rim's own image is no defect).
-Region pixels_near(const Tracer& free, const Scene& scene, const Vec3& c, double inner, double outer) {
+// The smallest of rho^2 = |S^-1 F^T (x - c)|^2 over the segment [a, b], for the ellipsoid with
+// centre c, frame F and semi-axes e: rho^2 is a quadratic in the segment's parameter, minimal at its
+// vertex (clamped to the segment).
+double min_rho2(const Vec3& a, const Vec3& b, const Vec3& c, const Mat3& F, const Vec3& e) {
+    const Mat3 Ft = F.transposed();
+    const Vec3 ya = Ft * (a - c), yd = Ft * (b - a);
+    const Vec3 u{ya.x / e.x, ya.y / e.y, ya.z / e.z}, v{yd.x / e.x, yd.y / e.y, yd.z / e.z};
+    const double vv = dot(v, v);
+    const double t = vv > 0 ? std::clamp(-dot(u, v) / vv, 0.0, 1.0) : 0.0;
+    return length2(u + v * t);
+}
+
+// Camera pixels whose centre ray (axial, through the defect-free object) passes within the
+// defect's ellipsoid grown by `outer` mm along each semi-axis but not within it grown by `inner`
+// (inner < 0: no inner limit). For a sphere of radius r that is a distance from its centre in
+// [r + inner, r + outer]; for an elongated one it follows its shape. Pixels outside 0.95 of the
+// clear aperture are left out (the rim's own image is no defect).
+Region pixels_near(const Tracer& free, const Scene& scene, const Defect& d, double inner, double outer) {
     Region reg;
     const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
-    const double W = scene.camera.size[0], H = scene.camera.size[1];
     const double a = 0.5 * scene.object.lens.diameter;
+    const Vec3 grow_out{outer, outer, outer}, grow_in{inner, inner, inner};
     for (int m = 0; m < M; ++m)
         for (int n = 0; n < N; ++n) {
-            const double x = -0.5 * W + (n + 0.5) * W / N, y = 0.5 * H - (m + 0.5) * H / M;
-            if (std::hypot(x, y) > 0.95 * a) continue;
-            const PrincipalPath p = free.principal_path({x, y, -1e3}, {0, 0, 1});
-            // The path's point at z = c.z: on the segment between the vertices around it.
-            Vec3 prev{x, y, -1e3};
-            double dist = INFINITY;
+            const long k = static_cast<long>(m) * N + n;
+            const Vec3 c = free.camera().pixel_centre(k);
+            if (std::hypot(c.x, c.y) > 0.95 * a) continue;
+            const PrincipalPath p = free.principal_path({c.x, c.y, -1e3}, {0, 0, 1});
+            Vec3 prev{c.x, c.y, -1e3};
+            double out2 = INFINITY, in2 = INFINITY;
             for (size_t i = 0; i <= p.vertices.size(); ++i) {
                 const Vec3 next = i < p.vertices.size() ? p.vertices[i] : prev + p.direction * 1e3;
-                if ((prev.z - c.z) * (next.z - c.z) <= 0 && next.z != prev.z) {
-                    const double s = (c.z - prev.z) / (next.z - prev.z);
-                    dist = std::min(dist, distance(prev + (next - prev) * s, c));
-                }
+                out2 = std::min(out2, min_rho2(prev, next, d.center, d.frame, d.semi_axes + grow_out));
+                if (inner >= 0) in2 = std::min(in2, min_rho2(prev, next, d.center, d.frame, d.semi_axes + grow_in));
                 prev = next;
             }
-            if (dist >= inner && dist <= outer) reg.pixels.push_back(m * N + n);
+            if (out2 <= 1.0 && (inner < 0 || in2 > 1.0)) reg.pixels.push_back(k);
         }
     return reg;
 }
@@ -181,18 +193,21 @@ int run(const ExperimentArgs& a) {
         const Scene& scene = r.loaded.scene;
         if (scene.defects.empty()) continue;
         const Scene free_scene = defect_free(scene);
-        const Solid free_solid = build_solid(free_scene);
+        const Solid free_solid = build_solid(free_scene, nullptr, /*surfaces_only=*/true);
         TracerOptions fo;
         fo.representation = Representation::Analytic;
         const Tracer free(free_scene, free_solid, fo);
         const double pitch = scene.camera.size[0] / scene.camera.resolution[0];
         std::vector<Region> defect_regions;
+        // The defect's image: its ellipsoid grown by half a pixel's diagonal. The surround: the
+        // shell 2 r + 2 px .. 5 r + 4 px beyond it, r the smallest semi-axis (for a sphere, 3 r + 2 px
+        // .. 6 r + 4 px from its centre).
         for (const auto& d : scene.defects)
-            defect_regions.push_back(pixels_near(free, scene, d.center, 0, d.max_semi_axis() + 0.5 * pitch * std::sqrt(2.0)));
+            defect_regions.push_back(pixels_near(free, scene, d, -1.0, 0.5 * pitch * std::sqrt(2.0)));
         for (size_t k = 0; k < scene.defects.size(); ++k) {
             const Defect& d = scene.defects[k];
-            const double rr = d.max_semi_axis();
-            Region surround = pixels_near(free, scene, d.center, 3 * rr + 2 * pitch, 6 * rr + 4 * pitch);
+            const double rr = d.max_semi_axis(), rmin = std::min({d.semi_axes.x, d.semi_axes.y, d.semi_axes.z});
+            Region surround = pixels_near(free, scene, d, 2 * rmin + 2 * pitch, 5 * rmin + 4 * pitch);
             for (const auto& other : defect_regions) surround = subtract(surround, other);
             md_columns.push_back(fmt::format("{} #{}", r.label, k));
             for (const auto& ch : channels) {
@@ -211,13 +226,11 @@ int run(const ExperimentArgs& a) {
         if (fs::path(exp.reference).stem().string() != r.stem) continue;
         const Scene& s = r.loaded.scene;
         Region valid;
-        const int N = s.camera.resolution[0], M = s.camera.resolution[1];
-        for (int m = 0; m < M; ++m)
-            for (int n = 0; n < N; ++n) {
-                const double x = -0.5 * s.camera.size[0] + (n + 0.5) * s.camera.size[0] / N;
-                const double y = 0.5 * s.camera.size[1] - (m + 0.5) * s.camera.size[1] / M;
-                if (std::hypot(x, y) <= 0.95 * 0.5 * s.object.lens.diameter) valid.pixels.push_back(m * N + n);
-            }
+        const TelecentricCamera camera(s.camera, 0.0);
+        for (long k = 0; k < camera.pixels(); ++k) {
+            const Vec3 c = camera.pixel_centre(k);
+            if (std::hypot(c.x, c.y) <= 0.95 * 0.5 * s.object.lens.diameter) valid.pixels.push_back(k);
+        }
         for (const auto& ch : channels) {
             // The deflection map is defined against the defect-free object itself: zero there.
             if (!r.features.has(ch)) continue;

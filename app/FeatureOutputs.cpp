@@ -109,7 +109,7 @@ std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& ow
     CsrMatrix free_T;
     if (!scene.defects.empty()) {
         const Scene free = defect_free(scene);
-        const Solid free_solid = build_solid(free);
+        const Solid free_solid = build_solid(free, nullptr, representation != Representation::MeshOnly);
         TracerOptions o;
         o.representation = representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
         free_T = render(Tracer(free, free_solid, o), options).T;

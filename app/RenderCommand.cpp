@@ -38,7 +38,8 @@ int run(const RenderArgs& a) {
             }
     StageReport report;
     int status = 0;
-    auto loaded = load_scene_and_solid(a.scene, report, status);
+    // auto and analytic trace closed forms where no defect cuts the glass: no mesh is built then.
+    auto loaded = load_scene_and_solid(a.scene, report, status, a.representation == "auto" || a.representation == "analytic");
     if (!loaded) return status;
     const Scene& scene = loaded->scene;
 

@@ -9,7 +9,8 @@
 
 namespace ltm::app {
 
-std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status) {
+std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status,
+                                                bool surfaces_only) {
     LoadedScene out;
     try {
         StageTimer t(&report, "parse");
@@ -21,7 +22,7 @@ std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageRe
         return std::nullopt;
     }
     try {
-        out.solid = build_solid(out.scene, &report);
+        out.solid = build_solid(out.scene, &report, surfaces_only);
     } catch (const std::invalid_argument& e) {
         std::cerr << fmt::format("{}: {}\n", out.scene.source, e.what());
         status = 2;

@@ -16,7 +16,9 @@ struct LoadedScene {
 };
 
 // On bad input prints the message to stderr, sets `status` to 2 and returns nothing.
-std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status);
+// `surfaces_only`: no mesh unless a defect cuts the glass (for the analytic representation).
+std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status,
+                                                bool surfaces_only = false);
 
 // The stages that ran (--verbose), then what did not run: "(no Boolean ran)" for a scene whose
 // defects cut nothing, "(no TetGen ran)" for one without a meshed index region.

@@ -293,10 +293,8 @@ int cavity_normal_sign(const TriMesh& tool, int tag, const Surface& s) {
     return -1;
 }
 
-DefectSolid make_ellipsoid(const Defect& d, int index, double tol, SurfaceTable& table, const Lens& lens) {
-    DefectSolid out;
+SurfaceInfo ellipsoid_surface(const Defect& d, int index) {
     const bool particle = d.type == DefectType::Particle, inclusion = d.type == DefectType::Inhomogeneity;
-    const Mat3 frame = d.is_sphere() ? sphere_frame(index) : d.frame;
     SurfaceInfo info;
     info.surface = d.is_sphere() ? Surface::sphere(d.center, d.semi_axes.x) : Surface::ellipsoid(d.center, d.frame, d.semi_axes);
     info.defect = index;
@@ -316,7 +314,13 @@ DefectSolid make_ellipsoid(const Defect& d, int index, double tol, SurfaceTable&
         info.outside = particle ? Medium::Glass : Medium::Air;
         info.normal_sign = particle ? +1 : -1;  // a particle keeps its outward shell; a void is a reversed one
     }
-    const int tag = table.add(info);
+    return info;
+}
+
+DefectSolid make_ellipsoid(const Defect& d, int index, double tol, SurfaceTable& table, const Lens& lens) {
+    DefectSolid out;
+    const Mat3 frame = d.is_sphere() ? sphere_frame(index) : d.frame;
+    const int tag = table.add(ellipsoid_surface(d, index));
     EllipsoidTessellation t = tessellate_ellipsoid(d.center, frame, d.semi_axes, tol, tag);
     out.tool = std::move(t.mesh);
     out.chord_error = t.chord_error_bound;
@@ -400,6 +404,10 @@ DefectSolid make_scratch(const Lens& lens, const Defect& d, int index, double to
 }
 
 }  // namespace
+
+int add_defect_surfaces(const Defect& d, int index, SurfaceTable& table) {
+    return table.add(ellipsoid_surface(d, index));
+}
 
 std::vector<DefectProblem> defect_problems(const Lens& lens, const Defect& d, const IndexField& field) {
     std::vector<DefectProblem> out;

@@ -48,6 +48,10 @@ struct DefectSolid {
     std::vector<int> tags;     // the table entries this defect added
 };
 
+// Adds an ellipsoid defect's surface to `table` (named "<type> <index>": bubble, pit, particle,
+// inhomogeneity) and returns its tag.
+int add_defect_surfaces(const Defect& d, int index, SurfaceTable& table);
+
 // Adds the defect's surfaces to `table` (named "<type> <index> ...") and tessellates its tool
 // with chord error <= tolerance.
 DefectSolid make_defect_solid(const Lens& lens, const Defect& d, int index, double tolerance, SurfaceTable& table);

@@ -1,6 +1,7 @@
 #include "defects/SolidBuilder.h"
 
 #include <algorithm>
+#include <optional>
 #include <fmt/format.h>
 #include <stdexcept>
 
@@ -59,16 +60,16 @@ namespace {
 constexpr double kRegionScale = 1.25, kLatticeScale = 1.12;
 
 // The mesh whose faces lie outside the surface they approximate: vertices pushed out along their
-// (area-weighted) normals by twice the chord error, so that a facet inscribed within e of a convex
-// surface clears it by at least e (a concave one is already outside).
-TriMesh circumscribed(TriMesh m, double chord_error) {
+// (area-weighted) normals by `offset`; twice the chord error makes a facet inscribed within e of a
+// convex surface clear it by at least e (a concave one is already outside).
+TriMesh circumscribed(TriMesh m, double offset) {
     std::vector<Vec3> normal(m.vertices.size());
     for (size_t f = 0; f < m.num_triangles(); ++f) {
         const auto& t = m.triangles[f];
         const Vec3 n = cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]);
         for (auto v : t) normal[v] += n;
     }
-    for (size_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] += normalize(normal[v]) * (2.0 * chord_error);
+    for (size_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] += normalize(normal[v]) * offset;
     return m;
 }
 
@@ -89,7 +90,11 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
         // The lattice (geometry/TetMesh.h) fills it out to rho = kLatticeScale, across the
         // ellipsoid where the field's curvature jumps; beyond, where n is constant and linear
         // interpolation exact, TetGen's unstructured layer along the boundary costs no accuracy.
-        const double emin = f->min_semi_axis(), tol = 0.01 * emin;
+        // The boundary only has to enclose the lattice (rho <= kLatticeScale): an icosphere with a
+        // chord error of 2 % of the unit sphere, under the ellipsoid's affine map, keeps its facets
+        // at rho >= 0.98 kRegionScale = 1.225 (the map preserves rho), whatever the ellipsoid's
+        // elongation; finer facets would only make TetGen refine along them.
+        const double tol = 0.02 * kRegionScale * f->max_semi_axis();
         r.boundary = tessellate_ellipsoid(defect->center, defect->frame, defect->semi_axes * kRegionScale, tol, 0).mesh;
         r.n2 = [f](const Vec3& x) { return f->n2(x); };
         r.hessian_bound = [f](const Vec3& c, double radius) { return f->hessian_bound(c, radius); };
@@ -98,13 +103,19 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
         r.depth = [f](const Vec3& x) { return (kLatticeScale - std::sqrt(f->s(x))) * f->min_semi_axis(); };
         return r;
     }
-    // linear_n: n^2 = (ior + k . x)^2 has the constant Hessian 2 k k^T, of norm 2 |k|^2.
-    const LensTessellation t = tessellate_lens(lens, opt.chord_tolerance, 0, 0, 0);
-    r.boundary = circumscribed(t.mesh, t.chord_error);
-    r.n2 = [field](const Vec3& x) { return field.n2(x); };
+    // linear_n: n^2 = (ior + k . x)^2 has the constant Hessian 2 k k^T, of norm 2 |k|^2. The
+    // boundary's facets need not be finer than a quarter of the lattice's spacing (paths meet the
+    // exact faces; the facets only enclose them).
     const double m = 2.0 * length2(field.gradient);
+    const double a = lattice_spacing(opt.index_tolerance, m);
+    // The region reaches 1.5 a beyond the glass and the lattice 0.9 a beyond it, so that TetGen's
+    // unstructured layer along the boundary lies outside the glass, where no path goes: inside,
+    // every tetrahedron is the lattice's (the exact faces cut through it).
+    const LensTessellation t = tessellate_lens(lens, std::max(opt.chord_tolerance, 0.25 * a), 0, 0, 0);
+    r.boundary = circumscribed(t.mesh, 2.0 * t.chord_error + 1.5 * a);
+    r.n2 = [field](const Vec3& x) { return field.n2(x); };
     r.hessian_bound = [m](const Vec3&, double) { return m; };
-    r.depth = [lens](const Vec3& x) { return lens.signed_distance(x); };
+    r.depth = [lens, a](const Vec3& x) { return lens.signed_distance(x) + 1.5 * a; };
     return r;
 }
 
@@ -112,9 +123,36 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
 static Solid build_surface_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt,
                                  StageReport* report);
 
+// The surface table alone, when no defect cuts the glass (build_solid, surfaces_only); nullopt
+// when one does. A defect cuts nothing when it is an ellipsoid strictly inside the glass
+// (ellipsoid_clearance > 0, exact) whose box overlaps no other defect's (conservative).
+static std::optional<Solid> surfaces_without_mesh(const Lens& lens, const std::vector<Defect>& defects,
+                                                  StageReport* report) {
+    StageTimer t(report, "surfaces");
+    std::vector<Aabb> boxes;
+    for (const Defect& d : defects) {
+        if (!d.is_ellipsoid() || d.surface_breaking) return std::nullopt;
+        if (!(ellipsoid_clearance(lens, d.center, d.frame, d.semi_axes) > 0)) return std::nullopt;
+        boxes.push_back(defect_bounds(lens, d));
+    }
+    for (size_t i = 0; i < boxes.size(); ++i)
+        for (size_t j = i + 1; j < boxes.size(); ++j)
+            if (boxes[i].overlaps(boxes[j])) return std::nullopt;
+    Solid s;
+    s.meshed = false;
+    s.surfaces = object_surfaces(lens);
+    for (size_t k = 0; k < defects.size(); ++k) add_defect_surfaces(defects[k], static_cast<int>(k), s.surfaces);
+    s.corefined.assign(defects.size(), false);
+    s.tag_chord_error.assign(s.surfaces.size(), 0.0);
+    t.done(fmt::format("{} analytic surfaces, no mesh (closed forms only)", s.surfaces.size()));
+    return s;
+}
+
 Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& opt, StageReport* report,
-                  const IndexField& field) {
-    Solid s = build_surface_solid(lens, defects, opt, report);
+                  const IndexField& field, bool surfaces_only) {
+    std::optional<Solid> bare;
+    if (surfaces_only) bare = surfaces_without_mesh(lens, defects, report);
+    Solid s = bare ? std::move(*bare) : build_surface_solid(lens, defects, opt, report);
     for (size_t k = 0; k < defects.size(); ++k) {
         const Defect& d = defects[k];
         if (d.type != DefectType::Inhomogeneity || d.index_profile != IndexProfile::Smooth) continue;

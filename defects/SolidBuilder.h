@@ -31,6 +31,7 @@ struct Solid {
     int enclosed_defects = 0;  // appended as reversed shells without a Boolean
     std::vector<bool> corefined;           // per defect: went through the Boolean (it cuts the glass)
     std::vector<double> tag_chord_error;   // per surface-table entry: bound on its faces' chord error, mm
+    bool meshed = true;        // false: built surfaces_only, `mesh` is empty
     // TetGen-meshed regions (geometry/TetMesh.h): one per smooth inhomogeneity (region_defect[i] =
     // its defect index), or one for the whole object under a linear_n field (region_defect = -1).
     std::vector<TetMesh> regions;
@@ -52,8 +53,13 @@ SurfaceTable object_surfaces(const Lens& lens);
 // own outward components. Smooth inhomogeneities add no faces (their boundary is no interface):
 // each becomes a TetGen region, meshed within options.index_tolerance, as does the whole object
 // under a linear_n `field`. No TetGen runs otherwise. Throws TetGenError naming the region.
+//
+// With `surfaces_only`, a scene whose defects cut nothing (no scratch, no pit, every bubble,
+// particle and inclusion strictly inside the glass and apart from the others) gets its surface
+// table without any mesh: the analytic representation traces closed forms only (Tracer.h), and
+// tessellating would be work nobody uses. A scene with a cut gets the full mesh regardless.
 Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& options,
-                  StageReport* report = nullptr, const IndexField& field = IndexField{});
+                  StageReport* report = nullptr, const IndexField& field = IndexField{}, bool surfaces_only = false);
 
 // The TetGen region of a smooth inhomogeneity (its circumscribed ellipsoid, clipped to the glass)
 // or, with defect == nullptr, of the whole object under a linear_n field (its circumscribed

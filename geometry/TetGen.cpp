@@ -756,7 +756,9 @@ double smallest_enclosing_ball(const Vec3& a, const Vec3& b, const Vec3& c, cons
 
 double lattice_spacing(double tolerance, double hessian_bound) {
     if (!(hessian_bound > 0)) return 0.0;
-    return 4.0 * std::sqrt(2.0 * tolerance / hessian_bound) / std::sqrt(5.0);
+    // 10 % inside the bound: a lattice tetrahedron exactly at it would be split wherever rounding
+    // tips M r^2 / 2 over the tolerance, and the splits would break the lattice's regularity.
+    return 0.9 * 4.0 * std::sqrt(2.0 * tolerance / hessian_bound) / std::sqrt(5.0);
 }
 
 TetMesh tetrahedralize(const TetRegion& region, StageReport* report) {

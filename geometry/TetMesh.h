@@ -72,7 +72,9 @@ struct TetRegion {
 // tolerance^1.0. The rotation keeps telecentric rays (along z) off the lattice's rows, along which
 // the periodic error would not average. BCC's Delaunay tetrahedra are congruent, with circumradius
 // a sqrt(5) / 4, which is their smallest enclosing radius (the circumcentre lies inside), so
-// a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where ||D^2 n^2|| <= M.
+// a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where ||D^2 n^2|| <= M; lattice_spacing
+// returns 0.9 of that, so that rounding never tips a lattice tetrahedron over the bound (a split
+// would break the regularity locally).
 inline constexpr double kLatticeAngles[3] = {37.3, 23.7, 11.1};  // degrees, rotation_from_euler_deg
 double lattice_spacing(double tolerance, double hessian_bound);
 

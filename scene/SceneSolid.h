@@ -6,8 +6,10 @@
 
 namespace ltm {
 
-inline Solid build_solid(const Scene& scene, StageReport* report = nullptr) {
-    return build_solid(Lens(scene.object.lens), scene.defects, scene.mesh, report, scene.object.index_field);
+// `surfaces_only`: no mesh when no defect cuts the glass (defects/SolidBuilder.h).
+inline Solid build_solid(const Scene& scene, StageReport* report = nullptr, bool surfaces_only = false) {
+    return build_solid(Lens(scene.object.lens), scene.defects, scene.mesh, report, scene.object.index_field,
+                       surfaces_only);
 }
 
 // The same object without its defects (the reference the deflection map is measured against).

@@ -46,6 +46,11 @@ public:
     }
     long pixels() const { return static_cast<long>(M_) * N_; }
     int samples_per_pixel() const { return spp_; }
+    // The centre of pixel k's footprint on the focus plane.
+    Vec3 pixel_centre(long k) const {
+        const long m = k / N_, n = k % N_;
+        return {-0.5 * width_ + (n + 0.5) * width_ / N_, 0.5 * height_ - (m + 0.5) * height_ / M_, focus_z_};
+    }
 
     // Sample s of pixel k. Positions are stratified over the footprint: a jittered grid when spp
     // is a square, otherwise Latin-hypercube strata (x stratum s, y stratum from a per-pixel

@@ -57,39 +57,67 @@ TetWalk::~TetWalk() = default;
 TetWalk::TetWalk(const TetMesh& mesh, std::vector<Patch> surfaces) : surfaces_(std::move(surfaces)) {
     for (const Patch& s : surfaces_) quadrics_.push_back(Quadric::from(s.surface));
     const size_t nt = mesh.tets.size();
-    tets_.resize(nt);
-    // Each shared face is built once, by the first of its two tetrahedra, from its vertices in
-    // ascending index order; the neighbour finds it through the neighbour list.
+    // Order the tetrahedra along a Morton curve of their centroids (21 bits per axis), so that a
+    // walk's next tetrahedron is usually near in memory.
+    std::vector<Aabb> box(nt);
+    for (size_t t = 0; t < nt; ++t)
+        for (auto id : mesh.tets[t]) box[t].extend(mesh.vertices[id]);
+    for (const Aabb& b : box) grid_box_.extend(b);
+    auto spread = [](std::uint64_t v) {  // the bits of v at every third position
+        v &= 0x1fffff;
+        v = (v | v << 32) & 0x1f00000000ffffull;
+        v = (v | v << 16) & 0x1f0000ff0000ffull;
+        v = (v | v << 8) & 0x100f00f00f00f00full;
+        v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+        v = (v | v << 2) & 0x1249249249249249ull;
+        return v;
+    };
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(nt);
+    const Vec3 ext = grid_box_.hi - grid_box_.lo;
     for (size_t t = 0; t < nt; ++t) {
+        const Vec3 c = (box[t].lo + box[t].hi) * 0.5;
+        std::uint64_t code = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double f = ext[k] > 0 ? (c[k] - grid_box_.lo[k]) / ext[k] : 0.0;
+            code |= spread(static_cast<std::uint64_t>(std::clamp(f, 0.0, 1.0) * 0x1fffff)) << k;
+        }
+        order[t] = {code, static_cast<std::uint32_t>(t)};
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<std::int32_t> rank(nt);
+    for (size_t i = 0; i < nt; ++i) rank[order[i].second] = static_cast<std::int32_t>(i);
+
+    tets_.resize(nt);
+    inv_height_.resize(nt);
+    for (size_t i = 0; i < nt; ++i) {
+        const size_t t = order[i].second;  // the mesh's index of the i-th tetrahedron
         const auto& v = mesh.tets[t];
-        Tet& T = tets_[t];
-        for (int i = 0; i < 4; ++i) {
-            const int n = mesh.neighbors[t][static_cast<size_t>(i)];
-            T.next[i] = n;
-            T.next_face[i] = 0;
-            if (n >= 0 && static_cast<size_t>(n) < t) {
+        Tet& T = tets_[i];
+        for (int f = 0; f < 4; ++f) {
+            const int n = mesh.neighbors[t][static_cast<size_t>(f)];
+            T.next[f] = n < 0 ? -1 : rank[static_cast<size_t>(n)];
+            T.next_face[f] = 0;
+            if (n >= 0)
                 for (int j = 0; j < 4; ++j)
-                    if (mesh.neighbors[static_cast<size_t>(n)][static_cast<size_t>(j)] == static_cast<std::int32_t>(t)) {
-                        T.face[i] = tets_[static_cast<size_t>(n)].face[j];
-                        T.next_face[i] = static_cast<std::uint8_t>(j);
-                        tets_[static_cast<size_t>(n)].next_face[j] = static_cast<std::uint8_t>(i);
-                    }
-            } else {
-                std::array<std::uint32_t, 3> key{};
-                for (int j = 0, k = 0; j < 4; ++j)
-                    if (j != i) key[static_cast<size_t>(k++)] = v[static_cast<size_t>(j)];
-                std::sort(key.begin(), key.end());
-                const Vec3 &a = mesh.vertices[key[0]], &b = mesh.vertices[key[1]], &c = mesh.vertices[key[2]];
-                Face f;
-                f.n = cross(b - a, c - a);
-                f.o = dot(f.n, a);
-                faces_.push_back(f);
-                T.face[i] = static_cast<std::uint32_t>(faces_.size() - 1);
+                    if (mesh.neighbors[static_cast<size_t>(n)][static_cast<size_t>(j)] == static_cast<std::int32_t>(t))
+                        T.next_face[f] = static_cast<std::uint8_t>(j);
+            // The face's plane from its vertices in ascending index order: the same numbers in both
+            // tetrahedra; its sign chosen positive toward this tetrahedron's opposite vertex.
+            std::array<std::uint32_t, 3> key{};
+            for (int j = 0, k = 0; j < 4; ++j)
+                if (j != f) key[static_cast<size_t>(k++)] = v[static_cast<size_t>(j)];
+            std::sort(key.begin(), key.end());
+            const Vec3 &a = mesh.vertices[key[0]], &b = mesh.vertices[key[1]], &c = mesh.vertices[key[2]];
+            Plane P;
+            P.n = cross(b - a, c - a);
+            P.o = dot(P.n, a);
+            const double height = dot(P.n, mesh.vertices[v[static_cast<size_t>(f)]]) - P.o;
+            if (height < 0) {
+                P.n = -P.n;
+                P.o = -P.o;
             }
-            const Face& f = faces_[T.face[i]];
-            const double height = dot(f.n, mesh.vertices[v[static_cast<size_t>(i)]]) - f.o;
-            if (height < 0) T.inward_negative |= static_cast<std::uint8_t>(1u << i);
-            T.inv_height[i] = 1.0 / std::fabs(height);
+            T.plane[f] = P;
+            inv_height_[i][static_cast<size_t>(f)] = 1.0 / std::fabs(height);
         }
         // n^2 = n2_0 + g . (x - v0): g solves [v1 - v0; v2 - v0; v3 - v0] g = [dn2_1, dn2_2, dn2_3].
         const Vec3 v0 = mesh.vertices[v[0]];
@@ -100,22 +128,16 @@ TetWalk::TetWalk(const TetMesh& mesh, std::vector<Patch> surfaces) : surfaces_(s
         T.g = (cross(e2, e3) * d1 + cross(e3, e1) * d2 + cross(e1, e2) * d3) / det;
         T.v0 = v0;
         T.n2_0 = mesh.n2[v[0]];
-        for (auto id : v) T.box.extend(mesh.vertices[id]);
-    }
-    // Surfaces per tetrahedron: those passing within the enclosing ball (centre, radius).
-    for (size_t t = 0; t < nt; ++t) {
-        const auto& v = mesh.tets[t];
-        Vec3 c;
+        // Surfaces: those passing within the enclosing ball (centre, radius).
+        Vec3 centre;
         const double r = smallest_enclosing_ball(mesh.vertices[v[0]], mesh.vertices[v[1]], mesh.vertices[v[2]],
-                                                 mesh.vertices[v[3]], &c);
-        tets_[t].surf_begin = static_cast<std::uint32_t>(tet_surfaces_.size());
+                                                 mesh.vertices[v[3]], &centre);
+        T.surf_begin = static_cast<std::uint32_t>(tet_surfaces_.size());
         for (size_t s = 0; s < surfaces_.size(); ++s)
-            if (may_meet(surfaces_[s].surface, c, r)) tet_surfaces_.push_back(static_cast<std::uint32_t>(s));
-        tets_[t].surf_count = static_cast<std::uint32_t>(tet_surfaces_.size()) - tets_[t].surf_begin;
+            if (may_meet(surfaces_[s].surface, centre, r)) tet_surfaces_.push_back(static_cast<std::uint32_t>(s));
+        T.surf_count = static_cast<std::uint32_t>(tet_surfaces_.size()) - T.surf_begin;
     }
     // The location grid: about two tetrahedra per cell.
-    for (const Tet& T : tets_) grid_box_.extend(T.box);
-    const Vec3 ext = grid_box_.hi - grid_box_.lo;
     const double vol = std::max(ext.x * ext.y * ext.z, 1e-300);
     const double h = std::cbrt(vol / std::max<double>(1.0, 0.5 * static_cast<double>(nt)));
     nx_ = std::max(1, static_cast<int>(std::ceil(ext.x / h)));
@@ -138,14 +160,14 @@ TetWalk::TetWalk(const TetMesh& mesh, std::vector<Patch> surfaces) : surfaces_(s
             cell_tets_.assign(cell_begin_[cells], 0);
             std::fill(count.begin(), count.end(), 0);
         }
-        for (size_t t = 0; t < nt; ++t) {
+        for (size_t i = 0; i < nt; ++i) {
             int lo[3], hi[3];
-            cell_range(tets_[t].box, lo, hi);
+            cell_range(box[order[i].second], lo, hi);
             for (int z = lo[2]; z <= hi[2]; ++z)
                 for (int y = lo[1]; y <= hi[1]; ++y)
                     for (int x = lo[0]; x <= hi[0]; ++x) {
                         const size_t c = (static_cast<size_t>(z) * ny_ + y) * nx_ + x;
-                        if (pass == 1) cell_tets_[cell_begin_[c] + count[c]] = static_cast<std::uint32_t>(t);
+                        if (pass == 1) cell_tets_[cell_begin_[c] + count[c]] = static_cast<std::uint32_t>(i);
                         ++count[c];
                     }
         }
@@ -167,7 +189,7 @@ int TetWalk::locate(const Vec3& x) const {
         const Tet& T = tets_[cell_tets_[k]];
         // The smallest barycentric coordinate, as a fraction of the opposite vertex's height.
         double m = INFINITY;
-        for (int i = 0; i < 4; ++i) m = std::min(m, face_value(T, i, x) * T.inv_height[i]);
+        for (int i = 0; i < 4; ++i) m = std::min(m, face_value(T, i, x) * inv_height_[cell_tets_[k]][static_cast<size_t>(i)]);
         if (m > best_min) {
             best_min = m;
             best = static_cast<int>(cell_tets_[k]);
@@ -194,15 +216,14 @@ TetWalk::Exit TetWalk::walk(const Vec3& r_in, const Vec3& p_in, int tet, bool wi
         double best = INFINITY;
         int best_face = -1;
         for (int i = 0; i < 4; ++i) {
-            const Face& f = faces_[T.face[i]];
-            const double sg = (T.inward_negative >> i) & 1 ? -1.0 : 1.0;
-            const double c1 = sg * dot(f.n, p), c2 = 0.25 * sg * dot(f.n, g);
+            const Plane& f = T.plane[i];
+            const double c1 = dot(f.n, p), c2 = 0.25 * dot(f.n, g);
             double t;
             if (i == entry) {
                 // s = tau (c1 + c2 tau): the other root, if the path curves back out.
                 t = (c2 < 0 && c1 > 0) ? -c1 / c2 : INFINITY;
             } else {
-                const double c0 = sg * (dot(f.n, r) - f.o);
+                const double c0 = dot(f.n, r) - f.o;
                 if (c0 <= 0 && (c1 < 0 || (c1 == 0 && c2 < 0))) t = 0;  // on or past the plane, going out
                 else t = first_exit(std::max(c0, 0.0), c1, c2, INFINITY);
             }

@@ -58,28 +58,25 @@ public:
     Exit walk(const Vec3& r, const Vec3& p, int tet, bool arc) const;
 
 private:
-    struct Face {
+    // A face plane, oriented so that it is positive inside the tetrahedron that stores it: n . x - o.
+    // The two tetrahedra sharing a face store bit-identical copies of opposite sign (negation is
+    // exact in floating point), computed once from the face's vertices in ascending index order.
+    struct Plane {
         Vec3 n;
         double o = 0;
     };
+    // Everything a crossing reads, in one block: one memory access per tetrahedron entered.
     struct Tet {
-        std::uint32_t face[4];
-        std::int32_t next[4];
-        std::uint8_t next_face[4];  // the index of the shared face in the neighbour
-        std::uint8_t inward_negative = 0;  // bit i: s_f < 0 inside this tetrahedron for face i
-        Vec3 g, v0;
+        Plane plane[4];             // plane[i]: the face opposite vertex i
+        Vec3 g, v0;                 // n^2 = n2_0 + g . (x - v0)
         double n2_0 = 0;
-        double inv_height[4];  // 1 / s_i at the vertex opposite face i: s_i * inv_height[i] is barycentric
+        std::int32_t next[4];       // the neighbour across face i, or -1
+        std::uint8_t next_face[4];  // the index of the shared face in the neighbour
         std::uint32_t surf_begin = 0, surf_count = 0;
-        Aabb box;
     };
-    double face_value(const Tet& t, int i, const Vec3& x) const {
-        const Face& f = faces_[t.face[i]];
-        const double s = dot(f.n, x) - f.o;
-        return (t.inward_negative >> i) & 1 ? -s : s;
-    }
-    std::vector<Face> faces_;
-    std::vector<Tet> tets_;
+    double face_value(const Tet& t, int i, const Vec3& x) const { return dot(t.plane[i].n, x) - t.plane[i].o; }
+    std::vector<Tet> tets_;          // in Morton order of their centroids: neighbours lie close in memory
+    std::vector<std::array<double, 4>> inv_height_;  // per tetrahedron: 1 / (face value at the opposite vertex)
     std::vector<std::uint32_t> tet_surfaces_;  // per tetrahedron, indices into surfaces_
     std::vector<Patch> surfaces_;
     std::vector<Quadric> quadrics_;
