@@ -3,6 +3,8 @@
 
 error_vs_time.png: render time against display-hit error over tessellation levels, with and
 without refinement, and the analytic representation. scaling.png: time against paths.
+grin_error_vs_time.png: display-hit error of a TetGen-meshed inclusion against meshing and tracing
+time over index tolerances (bench_grin).
 Needs Debian's python3-matplotlib.
 """
 import csv
@@ -47,3 +49,19 @@ ax.set_title("Scaling with samples per pixel and camera resolution")
 ax.grid(True, which="both", alpha=0.3)
 fig.tight_layout()
 fig.savefig(f"{folder}/scaling.png", dpi=120)
+
+rows = list(csv.DictReader(open(f"{folder}/grin_error_vs_time.csv")))
+fig, ax = plt.subplots(figsize=(7, 4.5))
+x = [float(r["tetgen_seconds"]) + float(r["trace_seconds"]) for r in rows]
+for key, marker, label in (("max_display_error_mm", "o", "largest"), ("mean_display_error_mm", "s", "mean")):
+    ax.loglog(x, [float(r[key]) for r in rows], marker=marker, label=f"{label} display-hit error")
+for r, xi in zip(rows, x):
+    ax.annotate(f'{float(r["index_tolerance"]):g}, {int(r["tetrahedra"]):,} tets', (xi, float(r["max_display_error_mm"])),
+                textcoords="offset points", xytext=(4, 4), fontsize=7)
+ax.set_xlabel("TetGen + tracing time for 625 rays (s)")
+ax.set_ylabel("display-hit error vs GRIN reference (mm)")
+ax.set_title("Smooth inclusion (2.5 mm, delta_n 0.02): error against time")
+ax.grid(True, which="both", alpha=0.3)
+ax.legend()
+fig.tight_layout()
+fig.savefig(f"{folder}/grin_error_vs_time.png", dpi=120)
