@@ -181,38 +181,20 @@ double Quadric::slope(const Vec3& x, const Vec3& p) const {
 
 namespace {
 
-// The root in [a, b] of f = q(path) with sign(f(a)) = -sign(f(b)), f monotone there: Newton
-// with the bracket kept and bisection whenever a step leaves it or fails to halve it.
+// The root in [a, b] of f = q(path) with sign(f(a)) = -sign(f(b)), f monotone there:
+// safeguarded Newton (Polynomial.h) from the bracket's near end, which the guaranteed step put
+// close to the root.
 double polish(const GrinPath& path, const Quadric& q, double a, double b, long* evals) {
-    // Safeguarded Newton (rtsafe, as in trace/Polynomial.cpp) from the bracket's near end, which
-    // the guaranteed step put close to the root.
-    Vec3 r, p;
-    path.state(a, r, p);
-    if (evals) ++*evals;
-    double x = a, f = q.value(r), df = q.slope(r, p);
-    const double fa = f;
-    double dx_old = b - a, dx = dx_old;
-    for (int it = 0; it < 128; ++it) {
-        if (f == 0) return x;
-        if (((x - b) * df - f) * ((x - a) * df - f) > 0 || std::fabs(2.0 * f) > std::fabs(dx_old * df)) {
-            dx_old = dx;
-            dx = 0.5 * (b - a);
-            x = a + dx;
-        } else {
-            dx_old = dx;
-            dx = f / df;
-            x -= dx;
-        }
-        if (std::fabs(dx) <= 2.0 * std::numeric_limits<double>::epsilon() * std::fabs(x) ||
-            std::fabs(dx) < std::numeric_limits<double>::min())
-            return x;
-        path.state(x, r, p);
+    auto eval = [&](double tau, double& f, double& df) {
+        Vec3 r, p;
+        path.state(tau, r, p);
         if (evals) ++*evals;
         f = q.value(r);
         df = q.slope(r, p);
-        if ((f < 0) == (fa < 0)) a = x; else b = x;
-    }
-    return x;
+    };
+    double fa, dfa;
+    eval(a, fa, dfa);
+    return safeguarded_newton(eval, a, b, fa, a, fa, dfa);
 }
 
 }  // namespace

@@ -21,12 +21,9 @@ double poly_derivative(const double* c, int degree, double x) {
 namespace {
 
 // The root of p in [a, b], given p(a) and p(b) of opposite signs and p monotone on [a, b]:
-// Newton's method safeguarded by bisection (Press et al., Numerical Recipes, 3rd ed., Sec. 9.4,
-// rtsafe): a Newton step that would leave the bracket, or that does not shrink to less than half
-// the step before, is replaced by bisection, and the bracket is kept around the root. A bracket
-// much wider than the magnitude of its finite end (the outer intervals reach the Cauchy bound) is
-// first narrowed by doubling steps out from that end. Stops when the step is below 2 ulps of the
-// root (or below the smallest normal double near 0) or p is exactly 0.
+// safeguarded Newton (Polynomial.h) from the end with the smaller |p|. A bracket much wider than
+// the magnitude of its finite end (the outer intervals reach the Cauchy bound) is first narrowed
+// by doubling steps out from that end.
 double solve_monotone(const double* c, int degree, double a, double b, double pa, double pb) {
     auto narrow = [&](double x, double px) {
         if ((px < 0) == (pa < 0)) {
@@ -49,29 +46,13 @@ double solve_monotone(const double* c, int degree, double a, double b, double pa
             if (crossed == from_a) break;  // the root lies between the end and x
         }
     }
-    double x = std::fabs(pa) <= std::fabs(pb) ? a : b;
-    double dx_old = b - a, dx = dx_old;
-    double f = x == a ? pa : pb;
-    double df = poly_derivative(c, degree, x);
-    for (int it = 0; it < 200; ++it) {
-        if (((x - b) * df - f) * ((x - a) * df - f) > 0 || std::fabs(2.0 * f) > std::fabs(dx_old * df)) {
-            dx_old = dx;
-            dx = 0.5 * (b - a);
-            x = a + dx;
-        } else {
-            dx_old = dx;
-            dx = f / df;
-            x -= dx;
-        }
-        if (std::fabs(dx) <= 2.0 * std::numeric_limits<double>::epsilon() * std::fabs(x) ||
-            std::fabs(dx) < std::numeric_limits<double>::min())
-            return x;
-        f = poly_eval(c, degree, x);
-        if (f == 0) return x;
-        df = poly_derivative(c, degree, x);
-        narrow(x, f);
-    }
-    return x;
+    const double x = std::fabs(pa) <= std::fabs(pb) ? a : b;
+    return safeguarded_newton(
+        [&](double t, double& f, double& df) {
+            f = poly_eval(c, degree, t);
+            df = poly_derivative(c, degree, t);
+        },
+        a, b, pa, x, x == a ? pa : pb, poly_derivative(c, degree, x));
 }
 
 // Roots of the quadratic c0 + c1 x + c2 x^2 (c2 != 0) in [lo, hi], ascending; a double root

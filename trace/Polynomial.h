@@ -11,7 +11,9 @@
 // multiplicity (p touches 0 without crossing) is not a crossing and is not reported, which is
 // what a ray that grazes a surface needs: no spurious hit.
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <limits>
 
 namespace ltm {
 
@@ -26,6 +28,36 @@ struct PolyRoots {
 // The roots in [lo, hi] of sum_i c[i] x^i (degree <= 4, c has degree + 1 entries), ascending.
 // Leading coefficients that are exactly 0 lower the degree.
 PolyRoots real_roots(const double* c, int degree, double lo, double hi);
+
+// The root in [a, b] of a function f monotone there, with f(x0) and f'(x0) known at x0 (a or b)
+// and f(a) of sign opposite to f(b): Newton's method safeguarded by bisection (Press et al.,
+// Numerical Recipes, 3rd ed., Sec. 9.4, rtsafe). A Newton step that would leave the bracket, or
+// that does not shrink to less than half the step before, is replaced by bisection, and the
+// bracket is kept around the root. Stops when the step is below 2 ulps of the root (or below the
+// smallest normal double near 0) or f is exactly 0. `eval(x, f, df)` evaluates both at x.
+template <class Eval>
+double safeguarded_newton(const Eval& eval, double a, double b, double fa, double x0, double f0, double df0) {
+    double x = x0, f = f0, df = df0;
+    double dx_old = b - a, dx = dx_old;
+    for (int it = 0; it < 200; ++it) {
+        if (f == 0) return x;
+        if (((x - b) * df - f) * ((x - a) * df - f) > 0 || std::fabs(2.0 * f) > std::fabs(dx_old * df)) {
+            dx_old = dx;
+            dx = 0.5 * (b - a);
+            x = a + dx;
+        } else {
+            dx_old = dx;
+            dx = f / df;
+            x -= dx;
+        }
+        if (std::fabs(dx) <= 2.0 * std::numeric_limits<double>::epsilon() * std::fabs(x) ||
+            std::fabs(dx) < std::numeric_limits<double>::min())
+            return x;
+        eval(x, f, df);
+        if ((f < 0) == (fa < 0)) a = x; else b = x;
+    }
+    return x;
+}
 
 // Horner evaluation of the polynomial and of its derivative.
 double poly_eval(const double* c, int degree, double x);

@@ -2,6 +2,7 @@
 // nothing is taken from trace/, from the geometry library's surfaces or lens, or from IndexField's
 // functions (independence: see GrinReference.h and AnalyticScene.h).
 #include "validation/GrinReference.h"
+#include "validation/ReferenceMath.h"
 
 #include <algorithm>
 #include <array>
@@ -18,37 +19,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kU = 0x1p-53;  // unit roundoff of double
-
-std::string defect_key(int k) { return "defects[" + std::to_string(k) + "]"; }
-
-// sag(R, rho) = R - sgn(R) sqrt(R^2 - rho^2): the height of a sphere of signed radius R above its
-// vertex tangent plane at radial distance rho. The sphere through the vertex (origin) with centre
-// (0, 0, R) is rho^2 + (z - R)^2 = R^2; its branch through the vertex is z = R - sgn(R) s,
-// s = sqrt(R^2 - rho^2). Without cancellation: R - sgn(R) s = (R^2 - s^2) / (R + sgn(R) s)
-// = rho^2 / (R + sgn(R) s), and s = sqrt((|R| - rho)(|R| + rho)). 0 for a plane (R = inf).
-double sag(double R, double rho) {
-    if (!std::isfinite(R)) return 0.0;
-    const double aR = std::fabs(R);
-    const double s = std::sqrt(std::max(0.0, (aR - rho) * (aR + rho)));
-    return rho * rho / (R + std::copysign(s, R));
-}
-
-// Roots of A t^2 + 2 b t + C = 0 (A > 0) from its reduced discriminant disc = b^2 - A C (given by
-// the caller in a cancellation-free form). The textbook (-b +- sqrt(disc)) / A loses the smaller
-// root when b^2 >> |A C|; the stable form never subtracts numbers of equal sign:
-//   q = -(b + sgn(b) sqrt(disc)),  t1 = q / A,  t2 = C / q   (Vieta: t1 t2 = C / A).
-bool stable_roots(double A, double b, double C, double disc, double& lo, double& hi) {
-    if (!(disc >= 0.0) || !(A > 0.0)) return false;
-    const double q = -(b + std::copysign(std::sqrt(disc), b));
-    if (q == 0.0) {
-        lo = hi = 0.0;
-        return true;
-    }
-    const double t1 = q / A, t2 = C / q;
-    lo = std::min(t1, t2);
-    hi = std::max(t1, t2);
-    return true;
-}
 
 // ||A||_inf = the largest absolute row sum. For a symmetric matrix it bounds the spectral norm
 // (the spectral radius is below every induced norm, and equals the spectral norm when A = A^T).

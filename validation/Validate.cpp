@@ -38,6 +38,40 @@ std::string seq(const std::vector<std::string>& s) {
 
 namespace {
 
+// Compares one traced path with its reference path under the given tolerances: the surface
+// sequence and the display first, then the vertices, the display hit and the final direction.
+// Updates the ray's category and records a failure (the first 20) with the ray and the reason.
+void compare(const ValidationRay& ray, const PrincipalPath& got, const Solid& solid, const Path& ref, double pos_tol,
+             double dir_tol, CategoryResult& c, ValidationReport& report) {
+    auto fail = [&](const std::string& why) {
+        if (report.failures.size() < 20)
+            report.failures.push_back(fmt::format("{} ray o=({:.17g}, {:.17g}, {:.17g}) d=({:.17g}, {:.17g}, {:.17g}): {}",
+                                                  ray.category, ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x,
+                                                  ray.direction.y, ray.direction.z, why));
+    };
+    std::vector<std::string> names;
+    for (int tag : got.tags) names.push_back(solid.surfaces[tag].name);
+    if (names != ref.surfaces || got.display_hit != ref.on_display) {
+        ++c.sequence_mismatches;
+        fail(fmt::format("surfaces [{}] but the reference has [{}]", seq(names), seq(ref.surfaces)));
+        return;
+    }
+    ++c.compared;
+    double hit_err = 0;
+    for (size_t i = 0; i < ref.vertices.size(); ++i) hit_err = std::max(hit_err, distance(got.vertices[i], ref.vertices[i]));
+    if (ref.on_display) hit_err = std::max(hit_err, std::hypot(got.x - ref.display_x, got.y - ref.display_y));
+    const double dir_err = angle_between(got.direction, ref.direction);
+    c.max_hit_error = std::max(c.max_hit_error, hit_err);
+    c.max_dir_error = std::max(c.max_dir_error, dir_err);
+    const double ratio = std::max(hit_err / pos_tol, dir_err / dir_tol);
+    c.max_ratio = std::max(c.max_ratio, ratio);
+    if (ratio > 1.0) {
+        ++c.over_tolerance;
+        fail(fmt::format("position error {:.3g} mm (tolerance {:.3g}), direction error {:.3g} rad (tolerance {:.3g})",
+                         hit_err, pos_tol, dir_err, dir_tol));
+    }
+}
+
 bool graded(const Scene& scene) {
     if (scene.object.index_field.graded()) return true;
     for (const Defect& d : scene.defects)
@@ -99,14 +133,6 @@ ValidationReport validate_graded(const Scene& scene, const Solid& solid, Represe
         const GrinPath ref = reference.trace(ray.origin, ray.direction);
         const RaySensitivity sens = reference.sensitivity(ray.origin, ray.direction);
         const PrincipalPath got = tracer.principal_path(ray.origin, ray.direction);
-        std::vector<std::string> names;
-        for (int tag : got.tags) names.push_back(solid.surfaces[tag].name);
-        auto fail = [&](const std::string& why) {
-            if (report.failures.size() < 20)
-                report.failures.push_back(fmt::format("{} ray o=({:.17g}, {:.17g}, {:.17g}) d=({:.17g}, {:.17g}, {:.17g}): {}",
-                                                      ray.category, ray.origin.x, ray.origin.y, ray.origin.z,
-                                                      ray.direction.x, ray.direction.y, ray.direction.z, why));
-        };
         if (!sens.stable || ref.path.lost || ref.path.truncated) {
             ++c.ill_conditioned;
             continue;
@@ -151,26 +177,7 @@ ValidationReport validate_graded(const Scene& scene, const Solid& solid, Represe
             pos_tol = grin_position_tolerance(ref, L, sens.kappa, e.position);
             dir_tol = grin_direction_tolerance(ref, L, sens.kappa_dir, e.direction);
         }
-        if (names != ref.path.surfaces || got.display_hit != ref.path.on_display) {
-            ++c.sequence_mismatches;
-            fail(fmt::format("surfaces [{}] but the reference has [{}]", seq(names), seq(ref.path.surfaces)));
-            continue;
-        }
-        ++c.compared;
-        double hit_err = 0;
-        for (size_t i = 0; i < ref.path.vertices.size(); ++i)
-            hit_err = std::max(hit_err, distance(got.vertices[i], ref.path.vertices[i]));
-        if (ref.path.on_display) hit_err = std::max(hit_err, std::hypot(got.x - ref.path.display_x, got.y - ref.path.display_y));
-        const double dir_err = angle_between(got.direction, ref.path.direction);
-        c.max_hit_error = std::max(c.max_hit_error, hit_err);
-        c.max_dir_error = std::max(c.max_dir_error, dir_err);
-        const double ratio = std::max(hit_err / pos_tol, dir_err / dir_tol);
-        c.max_ratio = std::max(c.max_ratio, ratio);
-        if (ratio > 1.0) {
-            ++c.over_tolerance;
-            fail(fmt::format("position error {:.3g} mm (tolerance {:.3g}), direction error {:.3g} rad (tolerance {:.3g})",
-                             hit_err, pos_tol, dir_err, dir_tol));
-        }
+        compare(ray, got, solid, ref.path, pos_tol, dir_tol, c, report);
     }
     for (const auto& [name, c] : report.categories) fold(report.total, c);
     return report;
@@ -198,37 +205,11 @@ ValidationReport validate(const Scene& scene, const Solid& solid, Representation
         const Path ref = reference.principal_path(ray.origin, ray.direction);
         const PrincipalPath got = tracer.principal_path(ray.origin, ray.direction);
         const PathTolerance tol = path_tolerance(reference, ray);
-        std::vector<std::string> names;
-        for (int tag : got.tags) names.push_back(solid.surfaces[tag].name);
-        auto fail = [&](const std::string& why) {
-            if (report.failures.size() < 20)
-                report.failures.push_back(fmt::format("{} ray o=({:.17g}, {:.17g}, {:.17g}) d=({:.17g}, {:.17g}, {:.17g}): {}",
-                                                      ray.category, ray.origin.x, ray.origin.y, ray.origin.z,
-                                                      ray.direction.x, ray.direction.y, ray.direction.z, why));
-        };
         if (!tol.stable) {
             ++c.ill_conditioned;
             continue;
         }
-        if (names != ref.surfaces || got.display_hit != ref.on_display) {
-            ++c.sequence_mismatches;
-            fail(fmt::format("surfaces [{}] but the reference has [{}]", seq(names), seq(ref.surfaces)));
-            continue;
-        }
-        ++c.compared;
-        double hit_err = 0;
-        for (size_t i = 0; i < ref.vertices.size(); ++i) hit_err = std::max(hit_err, distance(got.vertices[i], ref.vertices[i]));
-        if (ref.on_display) hit_err = std::max(hit_err, std::hypot(got.x - ref.display_x, got.y - ref.display_y));
-        const double dir_err = angle_between(got.direction, ref.direction);
-        c.max_hit_error = std::max(c.max_hit_error, hit_err);
-        c.max_dir_error = std::max(c.max_dir_error, dir_err);
-        const double ratio = std::max(hit_err / tol.position, dir_err / tol.direction);
-        c.max_ratio = std::max(c.max_ratio, ratio);
-        if (ratio > 1.0) {
-            ++c.over_tolerance;
-            fail(fmt::format("position error {:.3g} mm (tolerance {:.3g}), direction error {:.3g} rad (tolerance {:.3g})",
-                             hit_err, tol.position, dir_err, tol.direction));
-        }
+        compare(ray, got, solid, ref, tol.position, tol.direction, c, report);
     }
     for (const auto& [name, c] : report.categories) fold(report.total, c);
     return report;
