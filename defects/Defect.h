@@ -57,6 +57,11 @@ struct Defect {
     bool is_ellipsoid() const { return type != DefectType::Scratch; }
     bool is_sphere() const { return semi_axes.x == semi_axes.y && semi_axes.y == semi_axes.z; }
     double max_semi_axis() const;
+    // The smallest ellipsoidal radius squared, rho^2 = |S^-1 F^T (x - center)|^2 (F = frame,
+    // S = diag(semi_axes)), over the segment [a, b]. rho^2 is a quadratic in the segment's
+    // parameter t, minimal at its vertex t* = -(u . v) / (v . v) with u, v the scaled images of
+    // a - center and b - a; t* is clamped to [0, 1]. rho^2 < 1: the segment enters the ellipsoid.
+    double segment_min_rho2(const Vec3& a, const Vec3& b) const;
 };
 
 }  // namespace ltm

@@ -22,6 +22,16 @@ const char* to_string(DefectType t) {
 
 double Defect::max_semi_axis() const { return std::max({semi_axes.x, semi_axes.y, semi_axes.z}); }
 
+double Defect::segment_min_rho2(const Vec3& a, const Vec3& b) const {
+    const Mat3 Ft = frame.transposed();
+    const Vec3 ya = Ft * (a - center), yd = Ft * (b - a);
+    const Vec3 u{ya.x / semi_axes.x, ya.y / semi_axes.y, ya.z / semi_axes.z};
+    const Vec3 v{yd.x / semi_axes.x, yd.y / semi_axes.y, yd.z / semi_axes.z};
+    const double vv = dot(v, v);
+    const double t = vv > 0 ? std::clamp(-dot(u, v) / vv, 0.0, 1.0) : 0.0;
+    return length2(u + v * t);
+}
+
 double defect_tolerance(const Defect& d, double object_tolerance, double relative) {
     const double size = d.type == DefectType::Scratch ? std::min(d.width, d.depth)
                                                       : std::min({d.semi_axes.x, d.semi_axes.y, d.semi_axes.z});

@@ -38,7 +38,7 @@ void expect_linear(const Tracer& tracer, const std::vector<float>& x, const char
     const RenderResult t = render(tracer, {});
     RenderOptions direct;
     direct.pattern = &x;
-    direct.seed_offset = 1;
+    direct.stream = 1;
     const RenderResult y = render(tracer, direct);
     const double n = tracer.camera().samples_per_pixel();
     std::vector<double> tx(static_cast<size_t>(t.T.rows));

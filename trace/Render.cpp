@@ -1,7 +1,7 @@
 #include "trace/Render.h"
 
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -68,6 +68,10 @@ struct Entry {
 
 }  // namespace
 
+std::uint64_t render_seed(const Scene& scene, const RenderOptions& options) {
+    return options.stream == 0 ? scene.seed : mix_seed(scene.seed, options.stream);
+}
+
 RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
     const Scene& scene = tracer.scene();
@@ -75,8 +79,16 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     const long K = cam.pixels();
     const int spp = cam.samples_per_pixel();
     const long L = tracer.display().pixels();
-    const std::uint64_t seed = scene.seed + opt.seed_offset;
+    const std::uint64_t seed = render_seed(scene, opt);
     const bool pattern = opt.pattern != nullptr;
+    const long items = opt.pixels ? static_cast<long>(opt.pixels->size()) : K;
+    for (long i = 0; opt.pixels && i < items; ++i) {
+        const long k = (*opt.pixels)[static_cast<size_t>(i)];
+        if (k < 0 || k >= K || (i > 0 && k <= (*opt.pixels)[static_cast<size_t>(i - 1)]))
+            throw std::invalid_argument("render: the pixel subset must be ascending camera pixels in [0, " +
+                                        std::to_string(K) + ")");
+    }
+    const int D = opt.track_defects ? std::min(static_cast<int>(scene.defects.size()), kTrackedDefects) : 0;
     if (pattern && static_cast<long>(opt.pattern->size()) != L)
         throw std::invalid_argument("the pattern has " + std::to_string(opt.pattern->size()) +
                                     " values but the display has " + std::to_string(L) + " pixels");
@@ -87,16 +99,22 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         out.image.assign(static_cast<size_t>(K), 0.0);
         out.image_stderr.assign(static_cast<size_t>(K), 0.0);
     }
-    const long blocks = (K + kBlock - 1) / kBlock;
+    if (opt.track_defects) {
+        out.tracked_defects = D;
+        out.defect_paths.assign(static_cast<size_t>(K) * static_cast<size_t>(D), 0);
+    }
+    const long blocks = (items + kBlock - 1) / kBlock;
     std::vector<PathStats> block_stats(static_cast<size_t>(blocks));
-    Progress progress(opt.progress, K, spp);
+    Progress progress(opt.progress, items, spp);
 
     auto render_block = [&](long b) {
         PathStats& stats = block_stats[static_cast<size_t>(b)];
         std::vector<Entry> entries;
         entries.reserve(static_cast<size_t>(spp));
-        for (long k = b * kBlock; k < std::min(K, (b + 1) * kBlock); ++k) {
+        for (long i = b * kBlock; i < std::min(items, (b + 1) * kBlock); ++i) {
+            const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(i)] : i;
             const std::vector<int> perm = cam.permutation(k, seed);
+            std::uint32_t* hits = D > 0 ? &out.defect_paths[static_cast<size_t>(k) * static_cast<size_t>(D)] : nullptr;
             entries.clear();
             double sum = 0, sum2 = 0;
             for (int s = 0; s < spp; ++s) {
@@ -104,6 +122,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 Vec3 o, d;
                 cam.sample(k, s, perm, rng, o, d);
                 const PathResult r = tracer.sample_path(o, d, rng, stats);
+                for (std::uint64_t m = hits ? r.defects : 0; m != 0; m &= m - 1) ++hits[__builtin_ctzll(m)];
                 if (r.pixel < 0) continue;
                 if (pattern) {
                     const double f = r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
@@ -133,13 +152,15 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 i = j;
             }
         }
-        progress.add(std::min(K, (b + 1) * kBlock) - b * kBlock);
+        progress.add(std::min(items, (b + 1) * kBlock) - b * kBlock);
     };
 
-    {
-        const int threads = opt.threads > 0 ? opt.threads : static_cast<int>(std::thread::hardware_concurrency());
-        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(std::max(1, threads)));
-        tbb::parallel_for(0L, blocks, render_block);
+    const auto all_blocks = [&] { tbb::parallel_for(0L, blocks, render_block); };
+    if (opt.threads > 0) {
+        tbb::task_arena arena(opt.threads);
+        arena.execute(all_blocks);
+    } else {
+        all_blocks();
     }
     for (const auto& s : block_stats) out.stats.merge(s);
 

@@ -8,6 +8,11 @@
 // processed in fixed blocks and each row sums its samples in sample order, so the result is
 // bit-identical for a given seed whatever the number of threads. Memory grows with the nonzeros:
 // a row holds at most one entry per sample until it is merged.
+//
+// Threads: render() keeps no process-wide thread state. With options.threads = n > 0 it runs in a
+// task arena of its own with n threads; with 0 it runs in the caller's arena (all cores when the
+// caller is in none), so several renders can share one arena concurrently (the dataset command
+// renders several samples at once this way).
 #include <cstdint>
 #include <vector>
 
@@ -17,20 +22,35 @@
 namespace ltm {
 
 struct RenderOptions {
-    int threads = 0;                          // 0: all cores
+    int threads = 0;                          // 0: the caller's task arena; n > 0: an arena of n threads
     bool progress = false;                    // progress bar with paths/s and ETA on stderr
     const std::vector<float>* pattern = nullptr;  // render y = T x for this display pattern instead
-    std::uint64_t seed_offset = 0;            // added to the scene's seed (independent re-renders)
+    // 0: the scene's own seed. Otherwise the render uses mix_seed(scene.seed, stream) (Rng.h): an
+    // independent re-render of the same scene.
+    std::uint64_t stream = 0;
+    // Only these camera pixels (ascending, each once); the rows (image values) of the others stay
+    // empty (zero). Each rendered pixel gets exactly the values a full render gives it.
+    const std::vector<long>* pixels = nullptr;
+    // Count, per camera pixel and defect, the samples whose path interacted with the defect
+    // (PathResult::defects): the ground truth of where each defect is seen (study/GroundTruth.h).
+    bool track_defects = false;
 };
 
 struct RenderResult {
     CsrMatrix T;                         // without a pattern
     std::vector<double> image;           // with a pattern: y per camera pixel ...
     std::vector<double> image_stderr;    // ... and its Monte Carlo standard error
+    // track_defects: defect_paths[k * tracked_defects + j] = how many of pixel k's samples met
+    // defect j, for the first tracked_defects = min(defects, kTrackedDefects) defects.
+    int tracked_defects = 0;
+    std::vector<std::uint32_t> defect_paths;
     PathStats stats;
     double seconds = 0;
 };
 
 RenderResult render(const Tracer& tracer, const RenderOptions& options);
+
+// The seed a render with these options uses (scene.seed, or mixed with options.stream).
+std::uint64_t render_seed(const Scene& scene, const RenderOptions& options);
 
 }  // namespace ltm

@@ -13,6 +13,14 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
     return x ^ (x >> 31);
 }
 
+// A seed for stream `stream` of `seed`: splitmix64(seed + splitmix64(stream + c)). For a fixed
+// stream it is a bijection of the seed, for a fixed seed a bijection of the stream (splitmix64
+// and adding a constant are bijections of 64-bit words), and neighbouring inputs land far apart:
+// unlike seed + stream, (seed, stream + 1) and (seed + 1, stream) do not collide.
+inline std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t stream) {
+    return splitmix64(seed + splitmix64(stream + 0xd1b54a32d192ed03ull));
+}
+
 class Rng {
 public:
     Rng(std::uint64_t seed, std::uint64_t stream_a, std::uint64_t stream_b = 0) {

@@ -84,7 +84,14 @@ struct PrincipalPath {
 struct PathResult {
     long pixel = -1;   // display pixel l, or -1
     double weight = 0;
+    // Bit k: the path interacted with defect k (k < kTrackedDefects), whether or not it reached
+    // the display. Interacting means meeting one of the defect's optical surfaces (a bubble or
+    // particle wall, a scratch's groove, a uniform inclusion's interface) or, for a smooth
+    // inhomogeneity (no surface), passing through the ellipsoid where its index differs from the
+    // glass's (rho < 1 along the chord of each segment inside its region).
+    std::uint64_t defects = 0;
 };
+inline constexpr int kTrackedDefects = 64;
 
 class Tracer {
 public:
