@@ -14,28 +14,17 @@
 //   malformed YAML                      -> where yaml-cpp stopped
 // Checks run in file order (each mapping's entries in order, then its missing keys, then the
 // geometry of the object / of each defect once it is complete), and the first problem wins.
-#include <stdexcept>
 #include <string>
 
+#include "scene/InputError.h"
 #include "scene/Scene.h"
 
 namespace ltm {
 
-// One bad-input problem in a scene file. what() is the complete one-paragraph message:
-//   "<file>:<line>:<column>: <key path>: <message>"
-//   "<file>:<line>:<column>: <message>"               (no key path, e.g. malformed YAML)
-//   "<file>: cannot read scene file: <reason>"         (unreadable file; line = column = 0)
-// The key path names the value from the document root, e.g. "defects[2].radius",
-// "camera.resolution[0]", "object.r1".
-struct SceneError : std::runtime_error {
-    SceneError(std::string file, int line, int column, std::string key_path, std::string message);
-
-    std::string file;
-    int line = 0;     // 1-based; 0 when the file could not be read
-    int column = 0;   // 1-based; 0 when the file could not be read
-    std::string key_path;
-    std::string message;  // the bare message, without location and key path
-};
+// A problem in a scene file: an InputError (scene/InputError.h), e.g.
+// "scene.yaml:9:47: defects[0].radius: must be a positive length (mm), got -0.1".
+// The loader is built on the strict YAML engine of scene/StrictYaml.h.
+using SceneError = InputError;
 
 // Reads and parses the file at `path`; Scene::source is set to `path`.
 // Throws SceneError on any bad input.
