@@ -34,7 +34,9 @@ class SceneParser : public yaml::Reader {
 public:
     using Reader::Reader;
 
-    Scene run(const YAML::Node& root) const;
+    // `whole_file`: the root is a file's document (an empty one is "the scene file is empty"),
+    // not a mapping inside another document.
+    Scene run(const YAML::Node& root, bool whole_file) const;
 
 private:
     // [x, y] or [x, y, z] (a point of a face; `has_z` says whether z was given).
@@ -511,16 +513,18 @@ void SceneParser::parse_mesh(const Item& it, MeshOptions& mesh) const {
 // ---------------------------------------------------------------------------------------------
 // The document
 
-Scene SceneParser::run(const YAML::Node& root) const {
+Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     Scene scene;
     scene.source = file();
-    if (!root.IsDefined() || root.IsNull())
-        fail({1, 1}, "", "the scene file is empty: expected a mapping with at least the key 'object'");
+    const char* keys = "a mapping of scene keys (object, defects, camera, display, mesh, seed)";
+    if (!root.IsDefined() || root.IsNull()) {
+        if (whole_file) fail({1, 1}, "", "the scene file is empty: expected a mapping with at least the key 'object'");
+        // An undefined node (a key the caller looked up that is not there) has no mark.
+        fail(root.IsDefined() ? loc_of(root) : Loc{}, "", fmt::format("expected {}, got an empty value", keys));
+    }
     if (!root.IsMap())
         fail(loc_of(root), "",
-             fmt::format("expected a mapping of scene keys (object, defects, camera, display, mesh, seed) at the "
-                         "top level, got {}",
-                         describe(root)));
+             fmt::format("expected {}{}, got {}", keys, whole_file ? " at the top level" : "", describe(root)));
 
     // Geometry checks need the object; defects and the display are checked as soon as both they
     // and a valid object are known (at once in the usual key order).
@@ -581,9 +585,13 @@ Scene SceneParser::run(const YAML::Node& root) const {
 
 }  // namespace
 
+Scene parse_scene_node(const YAML::Node& root, const std::string& file, const std::string& prefix) {
+    return SceneParser(file, prefix).run(root, /*whole_file=*/false);
+}
+
 Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for_messages) {
     const YAML::Node root = yaml::parse_document(yaml_text, file_name_for_messages, "scene file");
-    return SceneParser(file_name_for_messages).run(root);
+    return SceneParser(file_name_for_messages).run(root, /*whole_file=*/true);
 }
 
 Scene load_scene(const std::string& path) { return parse_scene(yaml::read_file(path, "scene file"), path); }

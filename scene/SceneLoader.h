@@ -14,6 +14,8 @@
 //   malformed YAML                      -> where yaml-cpp stopped
 // Checks run in file order (each mapping's entries in order, then its missing keys, then the
 // geometry of the object / of each defect once it is complete), and the first problem wins.
+#include <yaml-cpp/yaml.h>
+
 #include <string>
 
 #include "scene/InputError.h"
@@ -33,5 +35,15 @@ Scene load_scene(const std::string& path);
 // Parses YAML text; `file_name_for_messages` is used in error messages and as Scene::source.
 // Throws SceneError on any bad input.
 Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for_messages);
+
+// Parses a scene given as a mapping inside another YAML document (the inline `scene:` of a
+// dataset spec). Locations are those of that document, named `file` in messages and as
+// Scene::source; key paths are the scene file's own, behind `prefix`, the mapping's key path in
+// its document: prefix "scene" reports "scene.object.r1", "" reports "object.r1". Where a scene
+// file reports at its document start (the default display.z, a missing object), this reports at
+// the mapping. A caller that reads the mapping as an entry `scene: ...` should check it is a
+// mapping first (yaml::Reader::require_map), so that an empty value is reported at its key.
+// Throws SceneError on any bad input.
+Scene parse_scene_node(const YAML::Node& root, const std::string& file, const std::string& prefix = "");
 
 }  // namespace ltm
