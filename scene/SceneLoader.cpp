@@ -314,7 +314,10 @@ void SceneParser::parse_ellipsoid_keys(const YAML::Node& map, const std::string&
         fail(rotation_key, join_path(path, "rotation"),
              "rotation applies only to an ellipsoid given by semi_axes: a sphere (radius) has no orientation");
     if (where.count("radius")) d.semi_axes = {radius, radius, radius};
-    d.frame = where.count("rotation") ? rotation_from_euler_deg(rotation) : Mat3::identity();
+    if (where.count("rotation"))
+        d.set_rotation_deg(rotation);
+    else
+        d.frame = Mat3::identity();
 }
 
 void SceneParser::parse_scratch_keys(const YAML::Node& map, const std::string& path, Defect& d, Where& where) const {
