@@ -36,6 +36,11 @@ struct Defect {
     Vec3 center;
     Vec3 semi_axes{0.1, 0.1, 0.1};
     Mat3 frame;
+    // The Euler angles (degrees) `frame` was made from, if any (set_rotation_deg): a scene file
+    // written for this defect (scene/SceneYaml.h) gives them back, and reading it rebuilds the
+    // same frame bit for bit. Without them the frame is the identity.
+    bool rotation_given = false;
+    Vec3 rotation_deg;
     bool surface_breaking = false;  // Bubble only
 
     // Inhomogeneity.
@@ -53,6 +58,14 @@ struct Defect {
     double start_angle = 0, end_angle = 0;  // degrees, right-handed about +z from +x
     double width = 0.05, depth = 0.02;
     ScratchProfile profile = ScratchProfile::V;
+
+    // Orients the ellipsoid: frame = rotation_from_euler_deg(angles_deg) (geometry/Vec3.h), and
+    // records the angles. The one way to turn a defect that a scene file can reproduce.
+    void set_rotation_deg(const Vec3& angles_deg) {
+        rotation_given = true;
+        rotation_deg = angles_deg;
+        frame = rotation_from_euler_deg(angles_deg);
+    }
 
     bool is_ellipsoid() const { return type != DefectType::Scratch; }
     bool is_sphere() const { return semi_axes.x == semi_axes.y && semi_axes.y == semi_axes.z; }

@@ -1,291 +1,45 @@
 #include "scene/SceneLoader.h"
 
-#include <yaml-cpp/yaml.h>
+#include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
-#include <cerrno>
-#include <charconv>
-#include <climits>
-#include <cstdint>
+#include <array>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
-#include <filesystem>
-#include <fmt/format.h>
-#include <fstream>
-#include <functional>
+#include <cstdint>
 #include <limits>
-#include <map>
 #include <optional>
-#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "defects/DefectSolid.h"
+#include "scene/StrictYaml.h"
 
 namespace ltm {
 
 namespace {
 
-std::string compose_message(const std::string& file, int line, int column, const std::string& key_path,
-                            const std::string& message) {
-    if (line <= 0) return file + ": " + message;
-    if (key_path.empty()) return fmt::format("{}:{}:{}: {}", file, line, column, message);
-    return fmt::format("{}:{}:{}: {}: {}", file, line, column, key_path, message);
-}
+using yaml::describe;
+using yaml::find_item;
+using yaml::Item;
+using yaml::items_of;
+using yaml::join_keys;
+using yaml::join_path;
+using yaml::KeyRule;
+using yaml::Loc;
+using yaml::loc_of;
+using yaml::Where;
 
-}  // namespace
-
-SceneError::SceneError(std::string file_, int line_, int column_, std::string key_path_, std::string message_)
-    : std::runtime_error(compose_message(file_, line_, column_, key_path_, message_)),
-      file(std::move(file_)),
-      line(line_),
-      column(column_),
-      key_path(std::move(key_path_)),
-      message(std::move(message_)) {}
-
-namespace {
-
-// ---------------------------------------------------------------------------------------------
-// Locations, descriptions, suggestions
-
-struct Loc {
-    int line = 1, column = 1;  // 1-based
-};
-
-Loc loc_of(const YAML::Node& n) {
-    const YAML::Mark m = n.Mark();
-    if (m.is_null() || m.line < 0) return {1, 1};
-    return {m.line + 1, m.column + 1};
-}
-
-// One `key: value` entry of a mapping. An empty value (`key:`) has a mark on the following line
-// in yaml-cpp, so problems with it are reported at the key.
-struct Item {
-    std::string key;
-    YAML::Node key_node, value;
-    Loc key_loc() const { return loc_of(key_node); }
-    Loc value_loc() const { return value.IsNull() ? loc_of(key_node) : loc_of(value); }
-};
-
-std::vector<Item> items_of(const YAML::Node& map) {
-    std::vector<Item> out;
-    for (auto it = map.begin(); it != map.end(); ++it)
-        out.push_back({it->first.IsScalar() ? it->first.Scalar() : std::string(), it->first, it->second});
-    return out;
-}
-
-std::string join_path(const std::string& parent, const std::string& key) {
-    if (parent.empty()) return key;
-    if (!key.empty() && key.front() == '[') return parent + key;
-    return parent + "." + key;
-}
-
-// Messages are one paragraph: no line breaks from the file's text.
-std::string one_line(const std::string& s) {
-    std::string t;
-    for (char c : s) t += (c == '\n' || c == '\r' || c == '\t') ? ' ' : c;
-    return t;
-}
-
-std::string clip(const std::string& s) {
-    std::string t = one_line(s);
-    if (t.size() > 40) t = t.substr(0, 37) + "...";
-    return t;
-}
-
-// A plain scalar is unquoted and has no tag (or a numeric one): only those can be numbers or
-// booleans; "50" in quotes is a string, as YAML says.
-bool is_plain(const YAML::Node& n) {
-    const std::string& tag = n.Tag();
-    return tag == "?" || tag == "tag:yaml.org,2002:float" || tag == "tag:yaml.org,2002:int" ||
-           tag == "tag:yaml.org,2002:bool";
-}
-
-std::string describe(const YAML::Node& n) {
-    switch (n.Type()) {
-        case YAML::NodeType::Undefined:
-        case YAML::NodeType::Null: return "an empty value";
-        case YAML::NodeType::Sequence:
-            return n.size() == 1 ? "a list of 1 item" : fmt::format("a list of {} items", n.size());
-        case YAML::NodeType::Map: return "a mapping";
-        case YAML::NodeType::Scalar:
-            if (!is_plain(n)) return fmt::format("the quoted string \"{}\"", clip(n.Scalar()));
-            return fmt::format("'{}'", clip(n.Scalar()));
-    }
-    return "an unknown node";
-}
-
-std::string lower(std::string s) {
-    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
-std::size_t levenshtein(const std::string& a, const std::string& b) {
-    std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-    for (std::size_t i = 1; i <= a.size(); ++i) {
-        cur[0] = i;
-        for (std::size_t j = 1; j <= b.size(); ++j)
-            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-        std::swap(prev, cur);
-    }
-    return prev[b.size()];
-}
-
-// The valid name closest to a misspelt one: edit distance up to 3 (at most half the word, so a
-// two-letter typo does not "suggest" an unrelated key), else a key that contains the word or is
-// contained in it ("thickness" -> "center_thickness").
-std::optional<std::string> nearest(const std::string& word, const std::vector<std::string>& valid) {
-    const std::string w = lower(word);
-    const std::size_t limit = std::min<std::size_t>(3, std::max<std::size_t>(1, w.size() / 2));
-    std::optional<std::string> best;
-    std::size_t best_d = limit + 1;
-    for (const auto& v : valid) {
-        const std::size_t d = levenshtein(w, lower(v));
-        if (d < best_d) best = v, best_d = d;
-    }
-    if (best) return best;
-    for (const auto& v : valid) {
-        const std::string lv = lower(v);
-        if ((w.size() >= 3 && lv.find(w) != std::string::npos) ||
-            (lv.size() >= 3 && w.find(lv) != std::string::npos))
-            return v;
-    }
-    return std::nullopt;
-}
-
-std::string list_words(const std::vector<std::string>& words, const char* last_sep) {
-    std::string s;
-    for (std::size_t i = 0; i < words.size(); ++i) {
-        if (i > 0) s += (i + 1 == words.size()) ? last_sep : ", ";
-        s += words[i];
-    }
-    return s;
-}
-
-std::string join_keys(const std::vector<std::string>& keys) { return list_words(keys, ", "); }
-
-// ---------------------------------------------------------------------------------------------
-// Scalars
-
-// YAML 1.2 core-schema floats and integers, plus the spellings of infinity people write.
-enum class Real { Number, Infinite, NaN, Invalid };
-
-Real parse_real(const std::string& s, double& out) {
-    std::size_t i = 0;
-    bool negative = false;
-    if (!s.empty() && (s[0] == '+' || s[0] == '-')) negative = s[0] == '-', i = 1;
-    const std::string body = s.substr(i);
-    const std::string lb = lower(body);
-    if (lb == "inf" || lb == ".inf" || lb == "infinity") {
-        out = negative ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
-        return Real::Infinite;
-    }
-    if (lb == "nan" || lb == ".nan") {
-        out = std::numeric_limits<double>::quiet_NaN();
-        return Real::NaN;
-    }
-    // [0-9]* ('.' [0-9]*)? ([eE] [-+]? [0-9]+)?, at least one mantissa digit.
-    std::size_t j = 0, digits = 0;
-    while (j < body.size() && std::isdigit(static_cast<unsigned char>(body[j]))) ++j, ++digits;
-    if (j < body.size() && body[j] == '.') {
-        ++j;
-        while (j < body.size() && std::isdigit(static_cast<unsigned char>(body[j]))) ++j, ++digits;
-    }
-    if (digits == 0) return Real::Invalid;
-    if (j < body.size() && (body[j] == 'e' || body[j] == 'E')) {
-        ++j;
-        if (j < body.size() && (body[j] == '+' || body[j] == '-')) ++j;
-        std::size_t exp_digits = 0;
-        while (j < body.size() && std::isdigit(static_cast<unsigned char>(body[j]))) ++j, ++exp_digits;
-        if (exp_digits == 0) return Real::Invalid;
-    }
-    if (j != body.size()) return Real::Invalid;
-    double v = 0;
-    const auto r = std::from_chars(body.data(), body.data() + body.size(), v, std::chars_format::general);
-    if (r.ec == std::errc::result_out_of_range) {
-        v = std::strtod(body.c_str(), nullptr);  // +-HUGE_VAL or 0, as the value rounds
-    } else if (r.ec != std::errc() || r.ptr != body.data() + body.size()) {
-        return Real::Invalid;
-    }
-    out = negative ? -v : v;
-    return std::isfinite(out) ? Real::Number : Real::Infinite;
-}
-
-bool is_infinity_word(const std::string& s) {
-    const std::string l = lower(!s.empty() && (s[0] == '+' || s[0] == '-') ? s.substr(1) : s);
-    return l == "inf" || l == ".inf" || l == "infinity";
-}
-
-// Decimal integer, optional sign, digits only (no 1e3, no 100.0).
-bool parse_integer(const std::string& s, long long& out, bool& overflow) {
-    overflow = false;
-    std::size_t i = (!s.empty() && (s[0] == '+' || s[0] == '-')) ? 1 : 0;
-    if (i == s.size()) return false;
-    for (std::size_t j = i; j < s.size(); ++j)
-        if (!std::isdigit(static_cast<unsigned char>(s[j]))) return false;
-    const char* begin = s.data() + (s[0] == '+' ? 1 : 0);
-    const auto r = std::from_chars(begin, s.data() + s.size(), out);
-    if (r.ec == std::errc::result_out_of_range) {
-        overflow = true;
-        return false;
-    }
-    return r.ec == std::errc() && r.ptr == s.data() + s.size();
-}
-
-// ---------------------------------------------------------------------------------------------
-// The parser
-
-// How a typed mapping (the object, a defect) talks about its unknown keys.
-struct KeyRule {
-    std::vector<std::string> keys;  // valid keys, in documentation order
-    std::string context;            // e.g. " for a window"
-    // A specific explanation for a key that is valid elsewhere (" (it is a key of scratches)").
-    std::function<std::optional<std::string>(const std::string&)> hint;
-};
-
-// Where each key's value sits in the file, to report geometry problems at it.
-using Where = std::map<std::string, Loc>;
-
-class Parser {
+// The scene's sections on top of the strict engine (scene/StrictYaml.h).
+class SceneParser : public yaml::Reader {
 public:
-    explicit Parser(std::string file) : file_(std::move(file)) {}
+    using Reader::Reader;
 
-    Scene run(const YAML::Node& root);
-
-    [[noreturn]] void fail(Loc at, const std::string& path, const std::string& message) const {
-        throw SceneError(file_, at.line, at.column, path, message);
-    }
+    // `whole_file`: the root is a file's document (an empty one is "the scene file is empty"),
+    // not a mapping inside another document.
+    Scene run(const YAML::Node& root, bool whole_file) const;
 
 private:
-    // Structure
-    void walk(const YAML::Node& map, const std::string& path, const KeyRule& rule,
-              const std::function<void(const Item&)>& visit) const;
-    void require_map(const Item& it, const std::string& path) const;
-    void require_keys(const YAML::Node& map, const std::string& path, const Where& present,
-                      const std::vector<std::string>& keys) const;
-    std::string unknown_key_message(const std::string& key, const KeyRule& rule) const;
-    const Item* find_item(const std::vector<Item>& items, const std::string& key) const;
-
-    // Values
-    double number(const YAML::Node& v, Loc at, const std::string& path, bool allow_inf = false) const;
-    double positive_length(const YAML::Node& v, Loc at, const std::string& path) const;
-    long long integer(const YAML::Node& v, Loc at, const std::string& path, long long min, long long max,
-                      const char* expected) const;
-    int positive_int(const YAML::Node& v, Loc at, const std::string& path) const;
-    bool boolean(const YAML::Node& v, Loc at, const std::string& path) const;
-    std::uint64_t seed(const YAML::Node& v, Loc at) const;
-    std::size_t choice(const YAML::Node& v, Loc at, const std::string& path,
-                       const std::vector<std::string>& options) const;
-    // A list of numbers of one of the given lengths; `element` checks and converts each one.
-    std::vector<double> number_list(
-        const YAML::Node& v, Loc at, const std::string& path, std::vector<std::size_t> lengths,
-        const std::string& shape,
-        const std::function<double(const YAML::Node&, Loc, const std::string&)>& element) const;
-    Vec3 vec3(const Item& it, const std::string& path, const std::string& shape) const;
-    Vec3 positive_vec3(const Item& it, const std::string& path, const std::string& shape) const;
+    // [x, y] or [x, y, z] (a point of a face; `has_z` says whether z was given).
     Vec3 point23(const Item& it, const std::string& path, bool& has_z) const;
 
     // Sections
@@ -316,165 +70,9 @@ private:
     void parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, bool& z_given) const;
     void parse_mesh(const Item& it, MeshOptions& mesh) const;
     void check_display(const ObjectDesc& object, const DisplayDesc& display, Loc z_loc, bool z_given) const;
-
-    std::string file_;
 };
 
-void Parser::walk(const YAML::Node& map, const std::string& path, const KeyRule& rule,
-                  const std::function<void(const Item&)>& visit) const {
-    std::map<std::string, Loc> seen;
-    for (const Item& it : items_of(map)) {
-        if (!it.key_node.IsScalar())
-            fail(it.key_loc(), path, fmt::format("expected a key name, got {}", describe(it.key_node)));
-        const std::string key_path = join_path(path, it.key);
-        const auto prev = seen.find(it.key);
-        if (prev != seen.end())
-            fail(it.key_loc(), key_path,
-                 fmt::format("duplicate key '{}' (first given on line {})", it.key, prev->second.line));
-        seen.emplace(it.key, it.key_loc());
-        if (std::find(rule.keys.begin(), rule.keys.end(), it.key) == rule.keys.end())
-            fail(it.key_loc(), key_path, unknown_key_message(it.key, rule));
-        visit(it);
-    }
-}
-
-std::string Parser::unknown_key_message(const std::string& key, const KeyRule& rule) const {
-    if (rule.hint)
-        if (auto h = rule.hint(key)) return fmt::format("unknown key '{}'{}{}", key, rule.context, *h);
-    if (auto s = nearest(key, rule.keys))
-        return fmt::format("unknown key '{}'{} (did you mean '{}'?)", key, rule.context, *s);
-    return fmt::format("unknown key '{}'{}; valid keys are: {}", key, rule.context, join_keys(rule.keys));
-}
-
-void Parser::require_map(const Item& it, const std::string& path) const {
-    if (!it.value.IsMap()) fail(it.value_loc(), path, fmt::format("expected a mapping, got {}", describe(it.value)));
-}
-
-void Parser::require_keys(const YAML::Node& map, const std::string& path, const Where& present,
-                          const std::vector<std::string>& keys) const {
-    for (const auto& k : keys)
-        if (!present.count(k)) fail(loc_of(map), join_path(path, k), fmt::format("missing required key '{}'", k));
-}
-
-const Item* Parser::find_item(const std::vector<Item>& items, const std::string& key) const {
-    for (const Item& it : items)
-        if (it.key_node.IsScalar() && it.key == key) return &it;
-    return nullptr;
-}
-
-double Parser::number(const YAML::Node& v, Loc at, const std::string& path, bool allow_inf) const {
-    const char* expected = allow_inf ? "a number or inf" : "a number";
-    double x = 0;
-    Real kind = Real::Invalid;
-    if (v.IsScalar()) {
-        if (is_plain(v))
-            kind = parse_real(v.Scalar(), x);
-        else if (allow_inf && is_infinity_word(v.Scalar()))
-            kind = parse_real(v.Scalar(), x);  // "inf" in quotes is accepted for radii (the word only)
-    }
-    switch (kind) {
-        case Real::Number: return x;
-        case Real::Infinite:
-            if (allow_inf) return x;
-            fail(at, path, fmt::format("expected a finite number, got {}", describe(v)));
-        case Real::NaN:
-            fail(at, path, fmt::format("expected {}, got {} (not a number)", allow_inf ? expected : "a finite number",
-                                       describe(v)));
-        case Real::Invalid: break;
-    }
-    fail(at, path, fmt::format("expected {}, got {}", expected, describe(v)));
-}
-
-double Parser::positive_length(const YAML::Node& v, Loc at, const std::string& path) const {
-    const double x = number(v, at, path);
-    if (!(x > 0)) fail(at, path, fmt::format("must be a positive length (mm), got {}", v.Scalar()));
-    return x;
-}
-
-long long Parser::integer(const YAML::Node& v, Loc at, const std::string& path, long long min, long long max,
-                          const char* expected) const {
-    long long x = 0;
-    bool overflow = false;
-    const bool parsed = v.IsScalar() && is_plain(v) && parse_integer(v.Scalar(), x, overflow);
-    if (parsed && x >= min && x <= max) return x;
-    if (overflow || (parsed && x > max))
-        fail(at, path, fmt::format("expected {} (at most {}), got {}", expected, max, describe(v)));
-    fail(at, path, fmt::format("expected {}, got {}", expected, describe(v)));
-}
-
-int Parser::positive_int(const YAML::Node& v, Loc at, const std::string& path) const {
-    return static_cast<int>(integer(v, at, path, 1, INT_MAX, "a positive integer"));
-}
-
-std::uint64_t Parser::seed(const YAML::Node& v, Loc at) const {
-    const char* expected = "a non-negative integer";
-    const std::string s = v.IsScalar() ? v.Scalar() : std::string();
-    const std::size_t skip = !s.empty() && s[0] == '+' ? 1 : 0;
-    const auto is_digit = [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; };
-    const bool digits =
-        v.IsScalar() && is_plain(v) && s.size() > skip && std::all_of(s.begin() + skip, s.end(), is_digit);
-    if (!digits) fail(at, "seed", fmt::format("expected {}, got {}", expected, describe(v)));
-    std::uint64_t x = 0;
-    const auto r = std::from_chars(s.data() + skip, s.data() + s.size(), x);
-    if (r.ec == std::errc::result_out_of_range)
-        fail(at, "seed", fmt::format("expected {} (at most {}), got {}", expected,
-                                     std::numeric_limits<std::uint64_t>::max(), describe(v)));
-    return x;
-}
-
-bool Parser::boolean(const YAML::Node& v, Loc at, const std::string& path) const {
-    if (v.IsScalar() && is_plain(v)) {
-        const std::string& s = v.Scalar();
-        if (s == "true" || s == "True" || s == "TRUE") return true;
-        if (s == "false" || s == "False" || s == "FALSE") return false;
-    }
-    fail(at, path, fmt::format("expected true or false, got {}", describe(v)));
-}
-
-std::size_t Parser::choice(const YAML::Node& v, Loc at, const std::string& path,
-                           const std::vector<std::string>& options) const {
-    if (v.IsScalar()) {
-        const auto hit = std::find(options.begin(), options.end(), v.Scalar());
-        if (hit != options.end()) return static_cast<std::size_t>(hit - options.begin());
-    }
-    std::string msg = fmt::format("expected {}, got {}", list_words(options, " or "), describe(v));
-    if (v.IsScalar())
-        if (auto s = nearest(v.Scalar(), options)) msg += fmt::format(" (did you mean '{}'?)", *s);
-    fail(at, path, msg);
-}
-
-std::vector<double> Parser::number_list(
-    const YAML::Node& v, Loc at, const std::string& path, std::vector<std::size_t> lengths, const std::string& shape,
-    const std::function<double(const YAML::Node&, Loc, const std::string&)>& element) const {
-    const bool length_ok =
-        v.IsSequence() && std::find(lengths.begin(), lengths.end(), v.size()) != lengths.end();
-    if (!length_ok) {
-        std::vector<std::string> ls;
-        for (auto n : lengths) ls.push_back(std::to_string(n));
-        fail(at, path, fmt::format("expected a list of {} {}, got {}", list_words(ls, " or "), shape, describe(v)));
-    }
-    std::vector<double> out;
-    for (std::size_t i = 0; i < v.size(); ++i) {
-        const YAML::Node e = v[i];
-        out.push_back(element(e, e.IsNull() ? at : loc_of(e), fmt::format("{}[{}]", path, i)));
-    }
-    return out;
-}
-
-Vec3 Parser::vec3(const Item& it, const std::string& path, const std::string& shape) const {
-    const auto xs = number_list(it.value, it.value_loc(), path, {3}, shape,
-                                [&](const YAML::Node& e, Loc at, const std::string& p) { return number(e, at, p); });
-    return {xs[0], xs[1], xs[2]};
-}
-
-Vec3 Parser::positive_vec3(const Item& it, const std::string& path, const std::string& shape) const {
-    const auto xs = number_list(
-        it.value, it.value_loc(), path, {3}, shape,
-        [&](const YAML::Node& e, Loc at, const std::string& p) { return positive_length(e, at, p); });
-    return {xs[0], xs[1], xs[2]};
-}
-
-Vec3 Parser::point23(const Item& it, const std::string& path, bool& has_z) const {
+Vec3 SceneParser::point23(const Item& it, const std::string& path, bool& has_z) const {
     const auto xs = number_list(it.value, it.value_loc(), path, {2, 3}, "numbers [x, y] or [x, y, z]",
                                 [&](const YAML::Node& e, Loc at, const std::string& p) { return number(e, at, p); });
     has_z = xs.size() == 3;
@@ -489,7 +87,7 @@ const std::vector<std::string> kLensKeys{"type", "r1", "r2", "center_thickness",
 const std::vector<std::string> kWindowKeys{"type", "thickness", "diameter", "ior", "rim", "absorption", "index_field"};
 const std::vector<std::string> kSphereKeys{"type", "radius", "ior", "absorption", "index_field"};
 
-void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) const {
+void SceneParser::parse_object(const Item& it, ObjectDesc& object, Where& where) const {
     const std::string path = "object";
     require_map(it, path);
     const auto items = items_of(it.value);
@@ -556,7 +154,7 @@ void Parser::parse_object(const Item& it, ObjectDesc& object, Where& where) cons
 
 // object.index_field: {type: linear_n2 | radial_n2 | spherical_n2 | quadratic_n2 | linear_n, ...}
 // (geometry/IndexField.h). Positions of its keys go into `where` as "index_field.<key>".
-void Parser::parse_index_field(const Item& it, IndexField& f, Where& where) const {
+void SceneParser::parse_index_field(const Item& it, IndexField& f, Where& where) const {
     const std::string path = "object.index_field";
     require_map(it, path);
     const auto items = items_of(it.value);
@@ -608,17 +206,8 @@ void Parser::parse_index_field(const Item& it, IndexField& f, Where& where) cons
     where["index_field"] = it.value_loc();
 }
 
-void Parser::check_object(const ObjectDesc& object, const Where& where, Loc object_loc) const {
-    auto located = [&](const std::string& key) {
-        for (std::string k = key; !k.empty();) {
-            const auto w = where.find(k);
-            if (w != where.end()) return w->second;
-            const auto cut = k.find_last_of(".[");
-            if (cut == std::string::npos) break;
-            k = k.substr(0, cut);
-        }
-        return object_loc;
-    };
+void SceneParser::check_object(const ObjectDesc& object, const Where& where, Loc object_loc) const {
+    auto located = [&](const std::string& key) { return yaml::located(where, key, object_loc); };
     const auto problems = Lens::problems(object.lens);
     if (!problems.empty()) {
         std::string key = problems.front().key;
@@ -641,7 +230,7 @@ const std::vector<std::string> kInhomogeneityKeys{"type", "center", "radius", "s
 const std::vector<std::string> kScratchKeys{"type", "surface", "width", "depth", "profile", "start", "end", "arc"};
 const std::vector<std::string> kArcKeys{"center", "radius", "start_angle", "end_angle"};
 
-Defect Parser::parse_defect(const YAML::Node& node, const std::string& path, Where& where) const {
+Defect SceneParser::parse_defect(const YAML::Node& node, const std::string& path, Where& where) const {
     if (!node.IsMap())
         fail(loc_of(node), path,
              fmt::format("expected a mapping with a 'type' key (bubble, scratch, particle or inhomogeneity), got {}",
@@ -660,8 +249,8 @@ Defect Parser::parse_defect(const YAML::Node& node, const std::string& path, Whe
     return d;
 }
 
-void Parser::parse_ellipsoid_keys(const YAML::Node& map, const std::string& path, DefectType type, Defect& d,
-                                  Where& where) const {
+void SceneParser::parse_ellipsoid_keys(const YAML::Node& map, const std::string& path, DefectType type, Defect& d,
+                                       Where& where) const {
     const bool bubble = type == DefectType::Bubble, inclusion = type == DefectType::Inhomogeneity;
     d.type = type;
     KeyRule rule;
@@ -725,10 +314,13 @@ void Parser::parse_ellipsoid_keys(const YAML::Node& map, const std::string& path
         fail(rotation_key, join_path(path, "rotation"),
              "rotation applies only to an ellipsoid given by semi_axes: a sphere (radius) has no orientation");
     if (where.count("radius")) d.semi_axes = {radius, radius, radius};
-    d.frame = where.count("rotation") ? rotation_from_euler_deg(rotation) : Mat3::identity();
+    if (where.count("rotation"))
+        d.set_rotation_deg(rotation);
+    else
+        d.frame = Mat3::identity();
 }
 
-void Parser::parse_scratch_keys(const YAML::Node& map, const std::string& path, Defect& d, Where& where) const {
+void SceneParser::parse_scratch_keys(const YAML::Node& map, const std::string& path, Defect& d, Where& where) const {
     d.type = DefectType::Scratch;
     KeyRule rule;
     rule.keys = kScratchKeys;
@@ -780,7 +372,7 @@ void Parser::parse_scratch_keys(const YAML::Node& map, const std::string& path, 
     d.arc = false;  // distinct end points, on the face: defect_problems
 }
 
-void Parser::parse_arc(const Item& it, const std::string& path, Defect& d, Where& where) const {
+void SceneParser::parse_arc(const Item& it, const std::string& path, Defect& d, Where& where) const {
     require_map(it, path);
     KeyRule rule;
     rule.keys = kArcKeys;
@@ -817,8 +409,8 @@ void Parser::parse_arc(const Item& it, const std::string& path, Defect& d, Where
     d.end_angle = end;
 }
 
-void Parser::check_defect(const ObjectDesc& object, const std::vector<Defect>& defects, std::size_t index,
-                          const Where& where, Loc defect_loc) const {
+void SceneParser::check_defect(const ObjectDesc& object, const std::vector<Defect>& defects, std::size_t index,
+                               const Where& where, Loc defect_loc) const {
     const Lens lens(object.lens);
     const Defect& d = defects[index];
     const std::string path = fmt::format("defects[{}]", index);
@@ -833,24 +425,13 @@ void Parser::check_defect(const ObjectDesc& object, const std::vector<Defect>& d
         key = "arc." + key;
     // The value of the named key, or of its nearest enclosing key in the file ("center[2]" ->
     // "center"), else the defect's own mapping.
-    Loc at = defect_loc;
-    for (std::string k = key; !k.empty();) {
-        const auto w = where.find(k);
-        if (w != where.end()) {
-            at = w->second;
-            break;
-        }
-        const auto cut = k.find_last_of(".[");
-        if (cut == std::string::npos) break;
-        k = k.substr(0, cut);
-    }
-    fail(at, join_path(path, key), problems.front().message);
+    fail(yaml::located(where, key, defect_loc), join_path(path, key), problems.front().message);
 }
 
 // ---------------------------------------------------------------------------------------------
 // Camera, display, mesh
 
-void Parser::parse_camera(const Item& it, CameraDesc& camera) const {
+void SceneParser::parse_camera(const Item& it, CameraDesc& camera) const {
     const std::string path = "camera";
     require_map(it, path);
     KeyRule rule;
@@ -874,7 +455,7 @@ void Parser::parse_camera(const Item& it, CameraDesc& camera) const {
     });
 }
 
-void Parser::parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, bool& z_given) const {
+void SceneParser::parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, bool& z_given) const {
     const std::string path = "display";
     require_map(it, path);
     z_loc = loc_of(it.value);
@@ -896,7 +477,7 @@ void Parser::parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, boo
     });
 }
 
-void Parser::check_display(const ObjectDesc& object, const DisplayDesc& display, Loc z_loc, bool z_given) const {
+void SceneParser::check_display(const ObjectDesc& object, const DisplayDesc& display, Loc z_loc, bool z_given) const {
     // The back face's farthest point: its vertex, or its rim when the back face bulges toward +z
     // (a spherical cap is monotonic in rho, so rho in {0, a} covers it).
     const Lens lens(object.lens);
@@ -908,7 +489,7 @@ void Parser::check_display(const ObjectDesc& object, const DisplayDesc& display,
                      back, display.z, z_given ? "" : " (the default)"));
 }
 
-void Parser::parse_mesh(const Item& it, MeshOptions& mesh) const {
+void SceneParser::parse_mesh(const Item& it, MeshOptions& mesh) const {
     const std::string path = "mesh";
     require_map(it, path);
     KeyRule rule;
@@ -935,16 +516,18 @@ void Parser::parse_mesh(const Item& it, MeshOptions& mesh) const {
 // ---------------------------------------------------------------------------------------------
 // The document
 
-Scene Parser::run(const YAML::Node& root) {
+Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     Scene scene;
-    scene.source = file_;
-    if (!root.IsDefined() || root.IsNull())
-        fail({1, 1}, "", "the scene file is empty: expected a mapping with at least the key 'object'");
+    scene.source = file();
+    const char* keys = "a mapping of scene keys (object, defects, camera, display, mesh, seed)";
+    if (!root.IsDefined() || root.IsNull()) {
+        if (whole_file) fail({1, 1}, "", "the scene file is empty: expected a mapping with at least the key 'object'");
+        // An undefined node (a key the caller looked up that is not there) has no mark.
+        fail(root.IsDefined() ? loc_of(root) : Loc{}, "", fmt::format("expected {}, got an empty value", keys));
+    }
     if (!root.IsMap())
         fail(loc_of(root), "",
-             fmt::format("expected a mapping of scene keys (object, defects, camera, display, mesh, seed) at the "
-                         "top level, got {}",
-                         describe(root)));
+             fmt::format("expected {}{}, got {}", keys, whole_file ? " at the top level" : "", describe(root)));
 
     // Geometry checks need the object; defects and the display are checked as soon as both they
     // and a valid object are known (at once in the usual key order).
@@ -995,7 +578,7 @@ Scene Parser::run(const YAML::Node& root) {
         } else if (e.key == "mesh") {
             parse_mesh(e, scene.mesh);
         } else if (e.key == "seed") {
-            scene.seed = seed(e.value, at);
+            scene.seed = seed(e.value, at, "seed");
         }
     });
     if (!have_object) fail(loc_of(root), "object", "missing required key 'object'");
@@ -1005,35 +588,15 @@ Scene Parser::run(const YAML::Node& root) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for_messages) {
-    Parser parser(file_name_for_messages);
-    std::vector<YAML::Node> docs;
-    try {
-        docs = YAML::LoadAll(yaml_text);
-    } catch (const YAML::Exception& e) {
-        const Loc at = e.mark.is_null() ? Loc{1, 1} : Loc{e.mark.line + 1, e.mark.column + 1};
-        parser.fail(at, "", "malformed YAML: " + one_line(e.msg));
-    }
-    if (docs.size() > 1)
-        parser.fail(loc_of(docs[1]), "",
-                    fmt::format("the file holds {} YAML documents (separated by ---); a scene file holds one",
-                                docs.size()));
-    return parser.run(docs.empty() ? YAML::Node() : docs.front());
+Scene parse_scene_node(const YAML::Node& root, const std::string& file, const std::string& prefix) {
+    return SceneParser(file, prefix).run(root, /*whole_file=*/false);
 }
 
-Scene load_scene(const std::string& path) {
-    auto unreadable = [&](const std::string& reason) {
-        return SceneError(path, 0, 0, "", "cannot read scene file: " + reason);
-    };
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw unreadable(std::strerror(EISDIR));
-    errno = 0;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw unreadable(std::strerror(errno != 0 ? errno : ENOENT));
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) throw unreadable(std::strerror(errno != 0 ? errno : EIO));
-    return parse_scene(text.str(), path);
+Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for_messages) {
+    const YAML::Node root = yaml::parse_document(yaml_text, file_name_for_messages, "scene file");
+    return SceneParser(file_name_for_messages).run(root, /*whole_file=*/true);
 }
+
+Scene load_scene(const std::string& path) { return parse_scene(yaml::read_file(path, "scene file"), path); }
 
 }  // namespace ltm

@@ -14,28 +14,19 @@
 //   malformed YAML                      -> where yaml-cpp stopped
 // Checks run in file order (each mapping's entries in order, then its missing keys, then the
 // geometry of the object / of each defect once it is complete), and the first problem wins.
-#include <stdexcept>
+#include <yaml-cpp/yaml.h>
+
 #include <string>
 
+#include "scene/InputError.h"
 #include "scene/Scene.h"
 
 namespace ltm {
 
-// One bad-input problem in a scene file. what() is the complete one-paragraph message:
-//   "<file>:<line>:<column>: <key path>: <message>"
-//   "<file>:<line>:<column>: <message>"               (no key path, e.g. malformed YAML)
-//   "<file>: cannot read scene file: <reason>"         (unreadable file; line = column = 0)
-// The key path names the value from the document root, e.g. "defects[2].radius",
-// "camera.resolution[0]", "object.r1".
-struct SceneError : std::runtime_error {
-    SceneError(std::string file, int line, int column, std::string key_path, std::string message);
-
-    std::string file;
-    int line = 0;     // 1-based; 0 when the file could not be read
-    int column = 0;   // 1-based; 0 when the file could not be read
-    std::string key_path;
-    std::string message;  // the bare message, without location and key path
-};
+// A problem in a scene file: an InputError (scene/InputError.h), e.g.
+// "scene.yaml:9:47: defects[0].radius: must be a positive length (mm), got -0.1".
+// The loader is built on the strict YAML engine of scene/StrictYaml.h.
+using SceneError = InputError;
 
 // Reads and parses the file at `path`; Scene::source is set to `path`.
 // Throws SceneError on any bad input.
@@ -44,5 +35,15 @@ Scene load_scene(const std::string& path);
 // Parses YAML text; `file_name_for_messages` is used in error messages and as Scene::source.
 // Throws SceneError on any bad input.
 Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for_messages);
+
+// Parses a scene given as a mapping inside another YAML document (the inline `scene:` of a
+// dataset spec). Locations are those of that document, named `file` in messages and as
+// Scene::source; key paths are the scene file's own, behind `prefix`, the mapping's key path in
+// its document: prefix "scene" reports "scene.object.r1", "" reports "object.r1". Where a scene
+// file reports at its document start (the default display.z, a missing object), this reports at
+// the mapping. A caller that reads the mapping as an entry `scene: ...` should check it is a
+// mapping first (yaml::Reader::require_map), so that an empty value is reported at its key.
+// Throws SceneError on any bad input.
+Scene parse_scene_node(const YAML::Node& root, const std::string& file, const std::string& prefix = "");
 
 }  // namespace ltm

@@ -1,0 +1,28 @@
+#include "scene/InputError.h"
+
+#include <fmt/format.h>
+
+#include <utility>
+
+namespace ltm {
+
+namespace {
+
+std::string compose_message(const std::string& file, int line, int column, const std::string& key_path,
+                            const std::string& message) {
+    if (line <= 0) return file + ": " + message;
+    if (key_path.empty()) return fmt::format("{}:{}:{}: {}", file, line, column, message);
+    return fmt::format("{}:{}:{}: {}: {}", file, line, column, key_path, message);
+}
+
+}  // namespace
+
+InputError::InputError(std::string file_, int line_, int column_, std::string key_path_, std::string message_)
+    : std::runtime_error(compose_message(file_, line_, column_, key_path_, message_)),
+      file(std::move(file_)),
+      line(line_),
+      column(column_),
+      key_path(std::move(key_path_)),
+      message(std::move(message_)) {}
+
+}  // namespace ltm
