@@ -22,7 +22,7 @@
 #include <stdexcept>
 #include <sys/stat.h>
 
-#include "trace/LtmFile.h"
+#include "io/AtomicFile.h"
 
 namespace ltm {
 
@@ -245,11 +245,11 @@ Image exr_to_image(Channels channels, int width, int height) {
     return img;
 }
 
-// Streams OpenEXR's output into an AtomicFileWriter (OpenEXR seeks back to write the line
-// offset table, which AtomicFileWriter supports).
+// Streams OpenEXR's output into an io::AtomicFile (OpenEXR seeks back to write the line offset
+// table, which AtomicFile supports).
 class AtomicOStream : public Imf::OStream {
 public:
-    explicit AtomicOStream(AtomicFileWriter& f) : Imf::OStream(f.path().c_str()), f_(f) {}
+    explicit AtomicOStream(io::AtomicFile& f) : Imf::OStream(f.path().c_str()), f_(f) {}
     void write(const char c[], int n) override {
         try {
             f_.write(c, static_cast<std::size_t>(n));
@@ -263,7 +263,7 @@ public:
     const std::string& error() const { return error_; }
 
 private:
-    AtomicFileWriter& f_;
+    io::AtomicFile& f_;
     std::string error_;
 };
 
@@ -358,7 +358,7 @@ void write_png(const std::string& path, const Image& img) {
         png_destroy_write_struct(png ? &png : nullptr, info ? &info : nullptr);
     }
     if (!ok) fail(std::string("libpng: ") + io.message);
-    AtomicFileWriter file(path, "PNG image");
+    io::AtomicFile file(path, "PNG image");
     file.write(encoded.data(), encoded.size());
     file.commit();
 }
@@ -379,7 +379,7 @@ void write_exr(const std::string& path, int width, int height,
             fail("channel '" + name + "' has " + std::to_string(values.size()) + " values, expected " +
                  std::to_string(width) + " x " + std::to_string(height) + " = " + std::to_string(n));
     }
-    AtomicFileWriter file(path, "EXR image");
+    io::AtomicFile file(path, "EXR image");
     {
         AtomicOStream os(file);
         try {

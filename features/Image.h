@@ -10,8 +10,7 @@
 //
 // Errors: every function that reads or writes a file throws std::runtime_error whose message
 // names the file and what is wrong (missing, empty, truncated, corrupt, unsupported kind, bad arguments). Writers are atomic
-// (trace/LtmFile.h, AtomicFileWriter): a failed write leaves an existing file untouched and no
-// temporary behind.
+// (io/AtomicFile.h): a failed write leaves an existing file untouched and no temporary behind.
 #include <string>
 #include <utility>
 #include <vector>
@@ -67,7 +66,7 @@ void write_png(const std::string& path, const Image& img);
 // top). Scan lines in increasing y, ZIP compression (lossless, 16 lines per block), data and
 // display windows (0, 0) - (width - 1, height - 1). Names must be non-empty and distinct.
 // Written through the general interface (Imf::Header, Imf::FrameBuffer, Imf::OutputFile) into the
-// temporary of an AtomicFileWriter. Atomic.
+// temporary of an io::AtomicFile. Atomic.
 void write_exr(const std::string& path, int width, int height,
                const std::vector<std::pair<std::string, std::vector<float>>>& channels);
 
