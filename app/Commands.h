@@ -23,8 +23,4 @@ void set_exit_status(int status);
 // internal error (status 1) reported as "ltmsim NAME: what".
 void run_guarded(const std::string& name, const std::function<int()>& body);
 
-// Writes `text` to `path` atomically (temporary file in the same folder, then rename); throws
-// std::runtime_error naming the path on failure, leaving nothing behind.
-void write_text_atomically(const std::string& path, const std::string& text);
-
 }  // namespace ltm::app

@@ -18,6 +18,7 @@
 #include "features/Contrast.h"
 #include "features/Image.h"
 #include "features/Plot.h"
+#include "io/AtomicFile.h"
 #include "scene/SceneSolid.h"
 #include "trace/LtmFile.h"
 #include "trace/Render.h"
@@ -269,8 +270,8 @@ int run(const ExperimentArgs& a) {
         for (double c : md_rows[ch]) md += fmt::format(" {:.3g} |", c);
         md += fmt::format(" {} |\n", false_pos.count(ch) ? std::to_string(false_pos[ch]) : "");
     }
-    write_text_atomically((fs::path(a.out) / "contrast.csv").string(), csv);
-    write_text_atomically((fs::path(a.out) / "contrast.md").string(), md);
+    io::write_file((fs::path(a.out) / "contrast.csv").string(), csv, "contrast table");
+    io::write_file((fs::path(a.out) / "contrast.md").string(), md, "contrast table");
 
     // The montage: rows are images, columns are scenes.
     std::vector<std::string> rows = exp.montage;

@@ -10,6 +10,7 @@
 #include "app/JsonLine.h"
 #include "features/Image.h"
 #include "features/Plot.h"
+#include "io/AtomicFile.h"
 #include "app/Commands.h"
 #include "scene/SceneJson.h"
 #include "scene/SceneSolid.h"
@@ -63,7 +64,7 @@ void write_run_json(const std::string& dir, const Scene& scene, const RenderResu
         "  \"threads\": {},\n  \"result\": {},\n  \"render_seconds\": {},\n  \"stages\": {},\n  \"path_statistics\": {}\n}}\n",
         kVersion, scene_to_json(scene, 2), scene.seed, to_string(representation), threads, result, json_number(r.seconds),
         report.to_json(), stats_json(r.stats));
-    write_text_atomically((fs::path(dir) / "run.json").string(), run_json);
+    io::write_file((fs::path(dir) / "run.json").string(), run_json, "run record");
 }
 
 FeatureImages write_render_folder(const std::string& dir, const Scene& scene, const RenderResult& r,

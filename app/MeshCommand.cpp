@@ -12,6 +12,7 @@
 #include "defects/SolidBuilder.h"
 #include "geometry/MeshExport.h"
 #include "geometry/VtuExport.h"
+#include "io/AtomicFile.h"
 
 namespace ltm::app {
 
@@ -125,7 +126,7 @@ int run(const MeshArgs& a) {
             t.done(a.output);
         }
     }
-    if (!a.stats.empty()) write_text_atomically(a.stats, stats_json(scene, solid, report));
+    if (!a.stats.empty()) io::write_file(a.stats, stats_json(scene, solid, report), "mesh statistics");
     if (a.verbose) {
         std::cerr << fmt::format("ltmsim mesh {} -> {}\n", a.scene, a.output) << verbose_stages(report);
     }

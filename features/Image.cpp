@@ -22,7 +22,7 @@
 #include <stdexcept>
 #include <sys/stat.h>
 
-#include "trace/LtmFile.h"
+#include "io/AtomicFile.h"
 
 namespace ltm {
 
@@ -106,6 +106,38 @@ void png_write_fn(png_structp png, png_bytep in, png_size_t n) {
     if (!stored) png_error(png, "out of memory");
 }
 void png_flush_fn(png_structp) {}
+
+// Encodes `samples` (rows top to bottom, each width * channels samples of bit_depth 8 or 16,
+// 16-bit ones big-endian) as a PNG into `encoded`; returns libpng's error ("" on success).
+std::string encode_png(int width, int height, int bit_depth, int color_type, std::vector<unsigned char>& samples,
+                       std::vector<unsigned char>& encoded) {
+    std::vector<png_bytep> rows(static_cast<std::size_t>(height));
+    const std::size_t rowbytes = samples.size() / static_cast<std::size_t>(height);
+    for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = samples.data() + r * rowbytes;
+    encoded.reserve(samples.size() / 2 + 1024);
+    PngIo io;
+    io.out = &encoded;
+    volatile bool ok = false;
+    {
+        png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, png_error_fn, png_warning_fn);
+        png_infop info = png ? png_create_info_struct(png) : nullptr;
+        if (png && info) {
+            if (setjmp(png_jmpbuf(png)) == 0) {
+                png_set_write_fn(png, &io, png_write_fn, png_flush_fn);
+                png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth,
+                             color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+                png_write_info(png, info);
+                png_write_image(png, rows.data());
+                png_write_end(png, nullptr);
+                ok = true;
+            }
+        } else {
+            std::snprintf(io.message, sizeof io.message, "libpng could not be initialised");
+        }
+        png_destroy_write_struct(png ? &png : nullptr, info ? &info : nullptr);
+    }
+    return ok ? std::string() : std::string(io.message);
+}
 
 // Decodes into `pixels` (8 or 16-bit samples, 1 or 3 channels); false with io.message on error.
 bool decode_png(PngIo& io, int& width, int& height, int& channels, int& depth, std::vector<unsigned char>& pixels,
@@ -245,11 +277,11 @@ Image exr_to_image(Channels channels, int width, int height) {
     return img;
 }
 
-// Streams OpenEXR's output into an AtomicFileWriter (OpenEXR seeks back to write the line
-// offset table, which AtomicFileWriter supports).
+// Streams OpenEXR's output into an io::AtomicFile (OpenEXR seeks back to write the line offset
+// table, which AtomicFile supports).
 class AtomicOStream : public Imf::OStream {
 public:
-    explicit AtomicOStream(AtomicFileWriter& f) : Imf::OStream(f.path().c_str()), f_(f) {}
+    explicit AtomicOStream(io::AtomicFile& f) : Imf::OStream(f.path().c_str()), f_(f) {}
     void write(const char c[], int n) override {
         try {
             f_.write(c, static_cast<std::size_t>(n));
@@ -263,7 +295,7 @@ public:
     const std::string& error() const { return error_; }
 
 private:
-    AtomicFileWriter& f_;
+    io::AtomicFile& f_;
     std::string error_;
 };
 
@@ -330,37 +362,30 @@ void write_png(const std::string& path, const Image& img) {
         }
         samples[i] = static_cast<unsigned char>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0));
     }
-    std::vector<png_bytep> rows(static_cast<std::size_t>(img.height));
-    const std::size_t rowbytes = static_cast<std::size_t>(img.width) * static_cast<std::size_t>(img.channels);
-    for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = samples.data() + r * rowbytes;
     std::vector<unsigned char> encoded;
-    encoded.reserve(samples.size() / 2 + 1024);
-    PngIo io;
-    io.out = &encoded;
-    volatile bool ok = false;
-    {
-        png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &io, png_error_fn, png_warning_fn);
-        png_infop info = png ? png_create_info_struct(png) : nullptr;
-        if (png && info) {
-            if (setjmp(png_jmpbuf(png)) == 0) {
-                png_set_write_fn(png, &io, png_write_fn, png_flush_fn);
-                png_set_IHDR(png, info, static_cast<png_uint_32>(img.width), static_cast<png_uint_32>(img.height), 8,
-                             img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-                             PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-                png_write_info(png, info);
-                png_write_image(png, rows.data());
-                png_write_end(png, nullptr);
-                ok = true;
-            }
-        } else {
-            std::snprintf(io.message, sizeof io.message, "libpng could not be initialised");
-        }
-        png_destroy_write_struct(png ? &png : nullptr, info ? &info : nullptr);
+    const std::string error = encode_png(img.width, img.height, 8,
+                                         img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, samples, encoded);
+    if (!error.empty()) fail("libpng: " + error);
+    io::write_file(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()), "PNG image");
+}
+
+void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& values) {
+    auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write PNG image '" + path + "': " + why); };
+    if (width <= 0 || height <= 0)
+        fail("the image is empty (" + std::to_string(width) + " x " + std::to_string(height) + ")");
+    const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    if (values.size() != n)
+        fail("there are " + std::to_string(values.size()) + " values for " + std::to_string(width) + " x " +
+             std::to_string(height) + " = " + std::to_string(n) + " pixels");
+    std::vector<unsigned char> samples(2 * n);  // PNG stores 16-bit samples big-endian
+    for (std::size_t i = 0; i < n; ++i) {
+        samples[2 * i] = static_cast<unsigned char>(values[i] >> 8);
+        samples[2 * i + 1] = static_cast<unsigned char>(values[i] & 0xFF);
     }
-    if (!ok) fail(std::string("libpng: ") + io.message);
-    AtomicFileWriter file(path, "PNG image");
-    file.write(encoded.data(), encoded.size());
-    file.commit();
+    std::vector<unsigned char> encoded;
+    const std::string error = encode_png(width, height, 16, PNG_COLOR_TYPE_GRAY, samples, encoded);
+    if (!error.empty()) fail("libpng: " + error);
+    io::write_file(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()), "PNG image");
 }
 
 void write_exr(const std::string& path, int width, int height,
@@ -379,7 +404,7 @@ void write_exr(const std::string& path, int width, int height,
             fail("channel '" + name + "' has " + std::to_string(values.size()) + " values, expected " +
                  std::to_string(width) + " x " + std::to_string(height) + " = " + std::to_string(n));
     }
-    AtomicFileWriter file(path, "EXR image");
+    io::AtomicFile file(path, "EXR image");
     {
         AtomicOStream os(file);
         try {

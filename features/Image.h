@@ -1,6 +1,6 @@
 #pragma once
 // Images in and out: display patterns read from PNG or OpenEXR, previews written as 8-bit PNG,
-// feature images written as multi-channel float OpenEXR.
+// masks as 16-bit greyscale PNG, feature images written as multi-channel float OpenEXR.
 //
 // Orientation (docs: /work/shared/conventions.md): row 0 of an Image is the +y (top) edge of the
 // picture, column 0 the -x (left) edge; this is also the first row stored in a PNG and the first
@@ -10,8 +10,8 @@
 //
 // Errors: every function that reads or writes a file throws std::runtime_error whose message
 // names the file and what is wrong (missing, empty, truncated, corrupt, unsupported kind, bad arguments). Writers are atomic
-// (trace/LtmFile.h, AtomicFileWriter): a failed write leaves an existing file untouched and no
-// temporary behind.
+// (io/AtomicFile.h): a failed write leaves an existing file untouched and no temporary behind.
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -62,12 +62,17 @@ std::vector<float> pattern_values(const Image& img);
 // k exactly); NaN is an error. Atomic.
 void write_png(const std::string& path, const Image& img);
 
+// A 16-bit greyscale PNG (e.g. an instance mask: 0 = background, k = instance k), width x height
+// values in Image order (row 0 = the top row of the picture). Each value is stored exactly as its
+// 16-bit code value (no scaling: read_image gives v / 65535). Atomic.
+void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& values);
+
 // An OpenEXR file with one 32-bit FLOAT channel per entry, named exactly as given (e.g.
 // "BrightField", "ScatterCount"), each holding width * height values in Image order (row 0 on
 // top). Scan lines in increasing y, ZIP compression (lossless, 16 lines per block), data and
 // display windows (0, 0) - (width - 1, height - 1). Names must be non-empty and distinct.
 // Written through the general interface (Imf::Header, Imf::FrameBuffer, Imf::OutputFile) into the
-// temporary of an AtomicFileWriter. Atomic.
+// temporary of an io::AtomicFile. Atomic.
 void write_exr(const std::string& path, int width, int height,
                const std::vector<std::pair<std::string, std::vector<float>>>& channels);
 

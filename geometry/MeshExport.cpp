@@ -1,8 +1,5 @@
 #include "geometry/MeshExport.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 // OpenMesh's VectorT default constructor leaves its elements uninitialised on purpose (speed), and
 // GCC 12 warns about that wherever a property vector grows: noise, silenced for its headers only.
 #pragma GCC diagnostic push
@@ -13,7 +10,6 @@
 #pragma GCC diagnostic pop
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -21,11 +17,12 @@
 #include <fstream>
 #include <iostream>
 #include <mutex>
-#include <random>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "io/AtomicFile.h"
 
 namespace ltm {
 namespace {
@@ -236,46 +233,6 @@ std::string prepend_obj_comments(const std::string& obj) {
            obj;
 }
 
-std::string errno_text(int e) { return std::strerror(e); }
-
-// Writes `bytes` to a new temporary file in `folder` and renames it onto `path`. The temporary
-// is created with O_EXCL (never clobbering anything) and mode 0666 filtered by the umask, like
-// any new file, and fsync'ed before the rename so that a crash cannot leave an empty file at
-// `path` in place of the old one. On any failure the temporary is removed.
-void write_atomically(const std::string& path, const fs::path& folder, const std::string& bytes) {
-    static std::mt19937_64 rng{std::random_device{}()};  // guarded by g_openmesh_io_mutex
-    std::string tmp;
-    int fd = -1;
-    for (int attempt = 0; attempt < 16 && fd < 0; ++attempt) {
-        tmp = (folder / fmt::format(".ltmsim-export-{:016x}.tmp", rng())).string();
-        fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (fd < 0 && errno != EEXIST) break;
-    }
-    if (fd < 0)
-        throw std::runtime_error(fmt::format("cannot write mesh '{}': cannot create a temporary file in '{}': {}",
-                                             path, folder.string(), errno_text(errno)));
-    auto fail = [&](const std::string& what, int e) {
-        if (fd >= 0) ::close(fd);
-        std::remove(tmp.c_str());
-        throw std::runtime_error(fmt::format("cannot write mesh '{}': {}: {}", path, what, errno_text(e)));
-    };
-    size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n < 0) {
-            if (errno == EINTR) continue;
-            fail(fmt::format("writing the temporary file '{}' failed", tmp), errno);
-        }
-        done += static_cast<size_t>(n);
-    }
-    if (::fsync(fd) != 0) fail(fmt::format("syncing the temporary file '{}' failed", tmp), errno);
-    const int fd_closed = fd;
-    fd = -1;
-    if (::close(fd_closed) != 0) fail(fmt::format("closing the temporary file '{}' failed", tmp), errno);
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-        fail(fmt::format("renaming the temporary file '{}' onto it failed", tmp), errno);
-}
-
 }  // namespace
 
 const char* to_string(MeshFormat f) {
@@ -335,7 +292,7 @@ void write_mesh(const std::string& path, const TriMesh& mesh, const SurfaceTable
         // OFF: '#' comments are a Geomview extension that not every OFF reader skips.
         case MeshFormat::Off: break;
     }
-    write_atomically(path, folder, bytes);
+    io::write_file(path, bytes, "mesh");
 }
 
 MeshFileSummary read_mesh_summary(const std::string& path) {

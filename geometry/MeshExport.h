@@ -56,10 +56,11 @@ MeshFormat mesh_format_for(const std::string& path, bool ascii_ply);
 // Writes `mesh` to `path` in format `fmt` (the extension of `path` is not consulted), with face
 // colours by role and, for PLY, the "tag" face property and header comments (see above).
 //
-// Atomic: the file is written to a temporary file in the same folder and renamed onto `path`,
-// so `path` holds either its previous content or the complete new file, never a partial one.
-// Throws std::runtime_error naming `path` (and leaves no temporary behind and `path` untouched)
-// when: the folder does not exist (it is never created) or is not a folder; the mesh is
+// Atomic (io/AtomicFile.h): the file is written to a temporary file in the same folder and
+// renamed onto `path`, so `path` holds either its previous content or the complete new file,
+// never a partial one. Throws std::runtime_error naming `path` (and leaves no temporary behind
+// and `path` untouched) when: the folder does not exist (it is never created) or is not a
+// folder; `path` is a folder; the mesh is
 // inconsistent (tags and triangles differ in number, a tag is outside `table`, a vertex index
 // is out of range, a coordinate is not finite) -- checked before any file is touched; OpenMesh
 // fails; or any file operation fails.

@@ -1,18 +1,13 @@
 #include "geometry/VtuExport.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <iterator>
-#include <random>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "io/AtomicFile.h"
 
 namespace ltm {
 namespace {
@@ -25,69 +20,10 @@ constexpr size_t kBlockBytes = size_t{1} << 20;
     throw std::runtime_error(fmt::format("cannot write VTU file '{}': {}", path, why));
 }
 
-// The atomic-writing pattern of geometry/MeshExport.cpp (whose helper is private to that file),
-// for text produced in blocks: a new temporary file in the target's folder, created with O_EXCL
-// (never clobbering anything) and mode 0666 filtered by the umask, fsync'ed and renamed onto the
-// target by commit(). Until commit() succeeds, the destructor (or any failure) removes it.
-class AtomicFile {
-public:
-    AtomicFile(const std::string& path, const fs::path& folder) : path_(path) {
-        thread_local std::mt19937_64 rng{std::random_device{}()};
-        for (int attempt = 0; attempt < 16 && fd_ < 0; ++attempt) {
-            tmp_ = (folder / fmt::format(".ltmsim-export-{:016x}.tmp", rng())).string();
-            fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-            if (fd_ < 0 && errno != EEXIST) break;
-        }
-        if (fd_ < 0)
-            fail(path_, fmt::format("cannot create a temporary file in '{}': {}", folder.string(), std::strerror(errno)));
-    }
-    ~AtomicFile() { discard(); }
-    AtomicFile(const AtomicFile&) = delete;
-    AtomicFile& operator=(const AtomicFile&) = delete;
-
-    void write(const std::string& bytes) {
-        size_t done = 0;
-        while (done < bytes.size()) {
-            const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
-            if (n < 0) {
-                if (errno == EINTR) continue;
-                failed(fmt::format("writing the temporary file '{}' failed", tmp_));
-            }
-            done += static_cast<size_t>(n);
-        }
-    }
-
-    void commit() {
-        if (::fsync(fd_) != 0) failed(fmt::format("syncing the temporary file '{}' failed", tmp_));
-        const int fd = fd_;
-        fd_ = -1;
-        if (::close(fd) != 0) failed(fmt::format("closing the temporary file '{}' failed", tmp_));
-        if (std::rename(tmp_.c_str(), path_.c_str()) != 0)
-            failed(fmt::format("renaming the temporary file '{}' onto it failed", tmp_));
-        tmp_.clear();
-    }
-
-private:
-    void discard() {
-        if (fd_ >= 0) ::close(fd_);
-        fd_ = -1;
-        if (!tmp_.empty()) std::remove(tmp_.c_str());
-        tmp_.clear();
-    }
-    [[noreturn]] void failed(const std::string& what) {
-        const int e = errno;
-        discard();
-        fail(path_, fmt::format("{}: {}", what, std::strerror(e)));
-    }
-
-    std::string path_, tmp_;
-    int fd_ = -1;
-};
-
 // Text accumulated in blocks of about kBlockBytes and written out as each fills.
 class BlockWriter {
 public:
-    explicit BlockWriter(AtomicFile& file) : file_(file) { buf_.reserve(kBlockBytes + 4096); }
+    explicit BlockWriter(io::AtomicFile& file) : file_(file) { buf_.reserve(kBlockBytes + 4096); }
     template <class... Args>
     void print(fmt::format_string<Args...> f, Args&&... args) {
         fmt::format_to(std::back_inserter(buf_), f, std::forward<Args>(args)...);
@@ -99,7 +35,7 @@ public:
     }
 
 private:
-    AtomicFile& file_;
+    io::AtomicFile& file_;
     std::string buf_;
 };
 
@@ -128,7 +64,7 @@ void write_vtu(const std::string& path, const TetMesh& mesh) {
     if (!fs::is_directory(folder, ec)) fail(path, fmt::format("'{}' is not a folder", folder.string()));
     validate(path, mesh);
 
-    AtomicFile file(path, folder);
+    io::AtomicFile file(path, "VTU file");
     BlockWriter out(file);
     const size_t nv = mesh.vertices.size(), nt = mesh.tets.size();
     // Version 0.1 is the one every VTK XML reader knows (meshio accepts 0.1 and 1.0; the two differ

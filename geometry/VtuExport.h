@@ -16,9 +16,9 @@
 
 namespace ltm {
 
-// Writes `mesh` to `path`. Atomic: the text goes to a temporary file in the same folder, which
-// is renamed onto `path` once complete, so `path` holds either its previous content or the whole
-// new file. Throws std::runtime_error naming `path` (leaving no temporary behind and `path`
+// Writes `mesh` to `path`. Atomic (io/AtomicFile.h): the text goes to a temporary file in the
+// same folder, which is renamed onto `path` once complete, so `path` holds either its previous
+// content or the whole new file. Throws std::runtime_error naming `path` (leaving no temporary behind and `path`
 // untouched) when the folder does not exist (it is never created) or is not a folder, when the
 // mesh is inconsistent (n2 and vertices differ in number, a vertex index is out of range, a
 // coordinate or n2 is not finite, n2 < 0) -- checked before any file is touched -- or when a file

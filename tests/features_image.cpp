@@ -1,5 +1,5 @@
 // Image I/O (features/Image.h): PNG and OpenEXR round trips, bit depths and colour types,
-// orientation checked in the files' own bytes, bad files, pattern luminance.
+// orientation checked in the files' own bytes, 16-bit masks, bad files, pattern luminance.
 #include <gtest/gtest.h>
 #include <png.h>
 #include <zlib.h>
@@ -547,6 +547,91 @@ TEST_F(ImageTest, FailedWritesNameThePathAndLeaveTheTarget) {
     msg = message_of([&] { ltm::write_exr(path("missing/y.exr"), 4, 4, {{"Y", img.data}}); });
     EXPECT_NE(msg.find("the folder '" + path("missing") + "' does not exist"), std::string::npos) << msg;
     EXPECT_EQ(listing(), (std::vector<std::string>{"keep.exr", "keep.png"}));
+}
+
+// ----- 16-bit masks -----
+
+// Reads a PNG with libpng's low-level interface, without any transformation: the IHDR fields
+// and the raw 16-bit samples (big-endian in the file) of a greyscale image.
+struct RawPng16 {
+    png_uint_32 width = 0, height = 0;
+    int bit_depth = 0, color_type = -1, interlace = -1;
+    std::vector<std::uint16_t> values;  // row-major, first stored row first
+};
+RawPng16 read_raw_png16(const std::string& file) {
+    RawPng16 r;
+    FILE* fp = std::fopen(file.c_str(), "rb");
+    if (!fp) return r;
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png_create_info_struct(png);
+    if (setjmp(png_jmpbuf(png))) std::abort();  // the file under test is broken: fail loudly
+    png_init_io(png, fp);
+    png_read_info(png, info);
+    png_get_IHDR(png, info, &r.width, &r.height, &r.bit_depth, &r.color_type, &r.interlace, nullptr, nullptr);
+    if (r.bit_depth == 16 && r.color_type == PNG_COLOR_TYPE_GRAY) {
+        std::vector<png_byte> row(png_get_rowbytes(png, info));
+        for (png_uint_32 y = 0; y < r.height; ++y) {
+            png_read_row(png, row.data(), nullptr);
+            for (png_uint_32 x = 0; x < r.width; ++x)
+                r.values.push_back(static_cast<std::uint16_t>((row[2 * x] << 8) | row[2 * x + 1]));
+        }
+    }
+    png_destroy_read_struct(&png, &info, nullptr);
+    std::fclose(fp);
+    return r;
+}
+
+TEST_F(ImageTest, Png16RoundTripsEveryValueWithRowZeroOnTop) {
+    // 7 x 5 with distinct values per pixel, the extremes, and both bytes of a sample mattering.
+    const int w = 7, h = 5;
+    std::vector<std::uint16_t> v(static_cast<std::size_t>(w * h));
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<std::uint16_t>(i * 1873 + 11);
+    v[0] = 0;
+    v[1] = 1;
+    v[2] = 255;
+    v[3] = 256;
+    v[4] = 65535;
+    v[5] = 65534;
+    v[static_cast<std::size_t>(w * h - 1)] = 65535;
+    ltm::write_png16(path("mask.png"), w, h, v);
+    EXPECT_EQ(listing(), std::vector<std::string>{"mask.png"});
+
+    // The IHDR chunk in the file's bytes: after the signature, length 13, "IHDR", width, height,
+    // then bit depth 16 and colour type 0 (greyscale).
+    const std::string bytes = slurp(path("mask.png"));
+    ASSERT_GE(bytes.size(), 33u);
+    EXPECT_EQ(bytes.substr(12, 4), "IHDR");
+    EXPECT_EQ(static_cast<unsigned char>(bytes[24]), 16);
+    EXPECT_EQ(static_cast<unsigned char>(bytes[25]), 0);
+
+    const RawPng16 r = read_raw_png16(path("mask.png"));
+    EXPECT_EQ(r.width, static_cast<png_uint_32>(w));
+    EXPECT_EQ(r.height, static_cast<png_uint_32>(h));
+    EXPECT_EQ(r.bit_depth, 16);
+    EXPECT_EQ(r.color_type, PNG_COLOR_TYPE_GRAY);
+    EXPECT_EQ(r.interlace, PNG_INTERLACE_NONE);
+    EXPECT_EQ(r.values, v);  // the first stored row is row 0
+
+    // read_image scales 16-bit code values to [0, 1].
+    const Image back = ltm::read_image(path("mask.png"));
+    ASSERT_EQ(back.channels, 1);
+    ASSERT_EQ(back.pixel_count(), v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) EXPECT_EQ(back.data[i], static_cast<float>(v[i]) / 65535.0f) << i;
+}
+
+TEST_F(ImageTest, Png16BadArgumentsAreRefusedAndTheTargetKept) {
+    const std::vector<std::uint16_t> v(12, 7);
+    ltm::write_png16(path("keep.png"), 4, 3, v);
+    const std::string before = slurp(path("keep.png"));
+    EXPECT_EQ(message_of([&] { ltm::write_png16(path("keep.png"), 5, 3, v); }),
+              "cannot write PNG image '" + path("keep.png") + "': there are 12 values for 5 x 3 = 15 pixels");
+    EXPECT_EQ(message_of([&] { ltm::write_png16(path("keep.png"), 0, 3, {}); }),
+              "cannot write PNG image '" + path("keep.png") + "': the image is empty (0 x 3)");
+    EXPECT_EQ(message_of([&] { ltm::write_png16(path("missing/m.png"), 4, 3, v); }),
+              "cannot write PNG image '" + path("missing/m.png") + "': the folder '" + path("missing") +
+                  "' does not exist");
+    EXPECT_EQ(slurp(path("keep.png")), before);
+    EXPECT_EQ(listing(), std::vector<std::string>{"keep.png"});
 }
 
 // ----- display pattern values -----

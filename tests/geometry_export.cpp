@@ -364,15 +364,16 @@ TEST_F(MeshExport, InvalidMeshThrowsAndLeavesTheExistingFileUntouched) {
     EXPECT_EQ(listing(dir_), std::vector<std::string>{"mesh.ply"});
 }
 
-// A failure after the temporary file exists: the target is a folder, so the final rename fails.
-// The temporary is removed and the folder is untouched.
-TEST_F(MeshExport, FailedRenameRemovesTheTemporary) {
+// A folder in the way of the target is refused (by io::AtomicFile, before any temporary exists;
+// a rename that fails after the temporary was written is tested in tests/io_atomic.cpp). The
+// folder is untouched and nothing is left behind.
+TEST_F(MeshExport, TargetThatIsAFolderIsRefused) {
     const fs::path target = dir_ / "taken.ply";
     fs::create_directory(target);
     fs::create_directory(target / "inside");
     expect_throw_with<std::runtime_error>(
         [&] { write_mesh(target.string(), octahedron(kOctaTags), table_, MeshFormat::PlyBinary); },
-        {target.string(), "renaming the temporary file"});
+        {target.string(), "it is a folder"});
     EXPECT_TRUE(fs::is_directory(target));
     EXPECT_EQ(listing(target), std::vector<std::string>{"inside"});
     EXPECT_EQ(listing(dir_), std::vector<std::string>{"taken.ply"});

@@ -11,117 +11,41 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <functional>
 #include <limits>
 #include <new>
-#include <random>
-#include <sstream>
 #include <stdexcept>
-#include <type_traits>
 #include <vector>
 
-namespace fs = std::filesystem;
+#include "io/Npz.h"
 
 namespace ltm {
 
 // ---------------------------------------------------------------------------------------------
-// AtomicFileWriter
+// Writing: the five arrays of scipy.sparse.save_npz, through io/Npz.h
 // ---------------------------------------------------------------------------------------------
 
-namespace {
-
-std::string errno_text(int e) { return std::strerror(e); }
-
-fs::path folder_of(const std::string& path) {
-    fs::path folder = fs::path(path).parent_path();
-    return folder.empty() ? fs::path(".") : folder;
-}
-
-}  // namespace
-
-AtomicFileWriter::AtomicFileWriter(const std::string& path, const std::string& kind) : path_(path), kind_(kind) {
-    if (path.empty()) throw std::runtime_error("cannot write " + kind + ": the path is empty");
-    const fs::path folder = folder_of(path);
-    std::error_code ec;
-    if (!fs::exists(folder, ec)) fail("the folder '" + folder.string() + "' does not exist");
-    if (!fs::is_directory(folder, ec)) fail("'" + folder.string() + "' is not a folder");
-    if (fs::is_directory(fs::path(path), ec)) fail("it is a folder");
-    std::random_device rd;
-    const std::string name = fs::path(path).filename().string();
-    for (int attempt = 0; attempt < 16 && fd_ < 0; ++attempt) {
-        const std::uint64_t r = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
-        char suffix[32];
-        std::snprintf(suffix, sizeof suffix, ".tmp-%016llx", static_cast<unsigned long long>(r));
-        tmp_ = (folder / ("." + name + suffix)).string();
-        fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (fd_ < 0 && errno != EEXIST) break;
-    }
-    if (fd_ < 0) {
-        const int e = errno;
-        tmp_.clear();
-        fail("cannot create a temporary file in '" + folder.string() + "': " + errno_text(e));
-    }
-}
-
-AtomicFileWriter::~AtomicFileWriter() { discard(); }
-
-void AtomicFileWriter::discard() noexcept {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-    if (!committed_ && !tmp_.empty()) ::unlink(tmp_.c_str());
-    tmp_.clear();
-}
-
-void AtomicFileWriter::fail(const std::string& reason) {
-    discard();
-    throw std::runtime_error("cannot write " + kind_ + " '" + path_ + "': " + reason);
-}
-
-void AtomicFileWriter::write(const void* bytes, std::size_t n) {
-    if (fd_ < 0) fail("internal error: write after commit or failure");
-    const auto* p = static_cast<const char*>(bytes);
-    while (n > 0) {
-        const ssize_t w = ::pwrite(fd_, p, std::min<std::size_t>(n, std::size_t(1) << 30), static_cast<off_t>(pos_));
-        if (w < 0) {
-            if (errno == EINTR) continue;
-            const int e = errno;
-            fail("writing the temporary file '" + tmp_ + "' failed: " + errno_text(e));
-        }
-        p += w;
-        n -= static_cast<std::size_t>(w);
-        pos_ += static_cast<std::uint64_t>(w);
-    }
-}
-
-void AtomicFileWriter::commit() {
-    if (fd_ < 0) fail("internal error: commit after commit or failure");
-    if (::fsync(fd_) != 0) {
-        const int e = errno;
-        fail("syncing the temporary file '" + tmp_ + "' failed: " + errno_text(e));
-    }
-    const int fd = fd_;
-    fd_ = -1;
-    if (::close(fd) != 0) {
-        const int e = errno;
-        fail("closing the temporary file '" + tmp_ + "' failed: " + errno_text(e));
-    }
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-        const int e = errno;
-        fail("renaming the temporary file '" + tmp_ + "' onto it failed: " + errno_text(e));
-    }
-    committed_ = true;
-    tmp_.clear();
-    // Make the rename itself durable; a failure here leaves a complete file, so it is not an error.
-    const int dir = ::open(folder_of(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dir >= 0) {
-        (void)::fsync(dir);
-        ::close(dir);
+void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options) {
+    const std::string invalid = T.check();
+    if (!invalid.empty()) throw std::runtime_error("cannot write LTM file '" + path + "': the matrix is invalid: " + invalid);
+    try {
+        // scipy's rule: int32 indptr unless nnz needs int64 (converted while writing, no copy).
+        static const std::string csr = "csr";
+        const std::vector<std::int64_t> shape = {T.rows, T.cols};
+        io::write_npz(path,
+                      {io::npy_array("indices", T.indices),
+                       T.nnz() < (std::size_t(1) << 31) ? io::npy_converted<std::int32_t>("indptr", T.indptr)
+                                                        : io::npy_array("indptr", T.indptr),
+                       io::npy_bytes_scalar("format", csr), io::npy_array("shape", shape),
+                       io::npy_array("data", T.data)},
+                      options, "LTM file");
+    } catch (const std::bad_alloc&) {
+        throw std::runtime_error("cannot write LTM file '" + path + "': out of memory");
     }
 }
 
 // ---------------------------------------------------------------------------------------------
-// Writing: .npy encoding and a streaming ZIP writer
+// Reading: a ZIP reader and .npy parser for what scipy and numpy write
 // ---------------------------------------------------------------------------------------------
 
 namespace {
@@ -129,7 +53,6 @@ namespace {
 constexpr std::uint32_t kSigLocal = 0x04034b50, kSigCentral = 0x02014b50, kSigEnd = 0x06054b50,
                         kSigEnd64 = 0x06064b50, kSigLocator64 = 0x07064b50;
 constexpr std::uint64_t k32 = 0xFFFFFFFFull;  // a 32-bit field with this value defers to ZIP64
-constexpr std::uint16_t kDosTime = 0, kDosDate = (0 << 9) | (1 << 5) | 1;  // 1980-01-01 00:00:00
 constexpr std::size_t kChunk = std::size_t(1) << 20;
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
@@ -138,15 +61,8 @@ constexpr bool kHostLittle = true;
 constexpr bool kHostLittle = false;
 #endif
 
-void put16(std::string& s, std::uint16_t v) {
-    for (int i = 0; i < 2; ++i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-}
-void put32(std::string& s, std::uint32_t v) {
-    for (int i = 0; i < 4; ++i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-}
-void put64(std::string& s, std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-}
+std::string errno_text(int e) { return std::strerror(e); }
+
 std::uint16_t get16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
 std::uint32_t get32(const std::uint8_t* p) {
     return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
@@ -156,279 +72,6 @@ std::uint64_t get64(const std::uint8_t* p) {
     return static_cast<std::uint64_t>(get32(p)) | (static_cast<std::uint64_t>(get32(p + 4)) << 32);
 }
 
-// The .npy preamble (format 1.0) for a C-order array; shape_repr is Python's repr of the shape
-// tuple: "(N,)" or "()".
-std::string npy_preamble(const std::string& descr, const std::string& shape_repr) {
-    std::string dict = "{'descr': '" + descr + "', 'fortran_order': False, 'shape': " + shape_repr + ", }";
-    const std::size_t unpadded = 10 + dict.size() + 1;  // magic 6, version 2, length 2, '\n'
-    dict.append((64 - unpadded % 64) % 64, ' ');
-    dict.push_back('\n');
-    std::string out("\x93NUMPY\x01\x00", 8);
-    put16(out, static_cast<std::uint16_t>(dict.size()));
-    return out + dict;
-}
-
-using Sink = std::function<void(const void*, std::size_t)>;
-
-// Streams n values of type In as little-endian Out values (Out an integer or float type).
-template <class Out, class In>
-void emit_le(const Sink& sink, const In* values, std::size_t n) {
-    if constexpr (std::is_same_v<Out, In> && kHostLittle) {
-        if (n > 0) sink(values, n * sizeof(Out));
-        return;
-    }
-    std::vector<std::uint8_t> buf;
-    const std::size_t per = kChunk / sizeof(Out);
-    buf.resize(std::min(n, per) * sizeof(Out));
-    for (std::size_t start = 0; start < n; start += per) {
-        const std::size_t m = std::min(per, n - start);
-        for (std::size_t i = 0; i < m; ++i) {
-            const Out v = static_cast<Out>(values[start + i]);
-            std::uint8_t raw[sizeof(Out)];
-            std::memcpy(raw, &v, sizeof(Out));
-            for (std::size_t b = 0; b < sizeof(Out); ++b)
-                buf[i * sizeof(Out) + b] = kHostLittle ? raw[b] : raw[sizeof(Out) - 1 - b];
-        }
-        sink(buf.data(), m * sizeof(Out));
-    }
-}
-
-struct Deflater {
-    z_stream zs{};
-    bool live = false;
-    ~Deflater() {
-        if (live) deflateEnd(&zs);
-    }
-};
-
-class ZipWriter {
-public:
-    ZipWriter(AtomicFileWriter& file, const NpzWriteOptions& options) : f_(file), opt_(options) {}
-
-    // One deflated entry of exactly `size` bytes, produced by produce(sink).
-    void add(const std::string& name, std::uint64_t size, const std::function<void(const Sink&)>& produce) {
-        Entry e;
-        e.name = name;
-        e.offset = f_.tell();
-        e.usize = size;
-        Deflater d;
-        if (deflateInit2(&d.zs, opt_.compression_level, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-            f_.fail("zlib's deflateInit2 failed (compression level " + std::to_string(opt_.compression_level) + ")");
-        d.live = true;
-        const std::uint64_t bound = deflateBound(&d.zs, static_cast<uLong>(size));
-        e.zip64_local = opt_.force_zip64 || size >= k32 || bound >= k32;
-
-        std::string local;
-        put32(local, kSigLocal);
-        put16(local, e.zip64_local ? 45 : 20);  // version needed: 4.5 for ZIP64, 2.0 for deflate
-        put16(local, 0);                         // flags
-        put16(local, 8);                         // deflate
-        put16(local, kDosTime);
-        put16(local, kDosDate);
-        put32(local, 0);  // CRC-32, sizes: patched below
-        put32(local, 0);
-        put32(local, 0);
-        put16(local, static_cast<std::uint16_t>(name.size()));
-        put16(local, e.zip64_local ? 20 : 0);
-        local += name;
-        if (e.zip64_local) {
-            put16(local, 0x0001);
-            put16(local, 16);
-            put64(local, 0);
-            put64(local, 0);
-        }
-        f_.write(local.data(), local.size());
-
-        std::vector<unsigned char> out(kChunk);
-        std::uint64_t consumed = 0, produced = 0;
-        uLong crc = crc32(0L, Z_NULL, 0);
-        auto pump = [&](int flush) {
-            int ret;
-            do {
-                d.zs.next_out = out.data();
-                d.zs.avail_out = static_cast<uInt>(out.size());
-                ret = deflate(&d.zs, flush);
-                if (ret == Z_STREAM_ERROR) f_.fail("zlib's deflate failed on entry '" + name + "'");
-                const std::size_t have = out.size() - d.zs.avail_out;
-                if (have > 0) f_.write(out.data(), have);
-                produced += have;
-            } while (d.zs.avail_out == 0 || (flush == Z_FINISH && ret != Z_STREAM_END));
-        };
-        const Sink sink = [&](const void* p, std::size_t n) {
-            const auto* bytes = static_cast<const unsigned char*>(p);
-            while (n > 0) {
-                const std::size_t m = std::min<std::size_t>(n, std::size_t(1) << 30);
-                crc = crc32_z(crc, bytes, m);
-                d.zs.next_in = const_cast<unsigned char*>(bytes);
-                d.zs.avail_in = static_cast<uInt>(m);
-                pump(Z_NO_FLUSH);
-                bytes += m;
-                n -= m;
-                consumed += m;
-            }
-        };
-        produce(sink);
-        d.zs.next_in = nullptr;
-        d.zs.avail_in = 0;
-        pump(Z_FINISH);
-        if (consumed != size)
-            f_.fail("internal error: entry '" + name + "' has " + std::to_string(consumed) + " bytes, expected " +
-                    std::to_string(size));
-        e.crc = static_cast<std::uint32_t>(crc);
-        e.csize = produced;
-
-        const std::uint64_t end = f_.tell();
-        std::string patch;
-        put32(patch, e.crc);
-        put32(patch, e.zip64_local ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.csize));
-        put32(patch, e.zip64_local ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.usize));
-        f_.seek(e.offset + 14);
-        f_.write(patch.data(), patch.size());
-        if (e.zip64_local) {
-            std::string sizes;
-            put64(sizes, e.usize);
-            put64(sizes, e.csize);
-            f_.seek(e.offset + 30 + name.size() + 4);
-            f_.write(sizes.data(), sizes.size());
-        }
-        f_.seek(end);
-        entries_.push_back(e);
-    }
-
-    void finish() {
-        const std::uint64_t cd_offset = f_.tell();
-        const bool force = opt_.force_zip64;
-        std::string cd;
-        for (const Entry& e : entries_) {
-            const bool big_u = force || e.usize >= k32, big_c = force || e.csize >= k32,
-                       big_o = force || e.offset >= k32;
-            std::string extra;
-            if (big_u || big_c || big_o) {
-                std::string fields;
-                if (big_u) put64(fields, e.usize);
-                if (big_c) put64(fields, e.csize);
-                if (big_o) put64(fields, e.offset);
-                put16(extra, 0x0001);
-                put16(extra, static_cast<std::uint16_t>(fields.size()));
-                extra += fields;
-            }
-            const std::uint16_t version = (e.zip64_local || !extra.empty()) ? 45 : 20;
-            put32(cd, kSigCentral);
-            put16(cd, version);  // made by: MS-DOS host (attributes unused), spec version
-            put16(cd, version);  // needed
-            put16(cd, 0);
-            put16(cd, 8);
-            put16(cd, kDosTime);
-            put16(cd, kDosDate);
-            put32(cd, e.crc);
-            put32(cd, big_c ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.csize));
-            put32(cd, big_u ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.usize));
-            put16(cd, static_cast<std::uint16_t>(e.name.size()));
-            put16(cd, static_cast<std::uint16_t>(extra.size()));
-            put16(cd, 0);  // comment length
-            put16(cd, 0);  // disk number start
-            put16(cd, 0);  // internal attributes
-            put32(cd, 0);  // external attributes
-            put32(cd, big_o ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.offset));
-            cd += e.name;
-            cd += extra;
-        }
-        f_.write(cd.data(), cd.size());
-        const std::uint64_t cd_size = cd.size(), n = entries_.size();
-        const bool big_n = force || n >= 0xFFFF, big_size = force || cd_size >= k32,
-                   big_off = force || cd_offset >= k32;
-        std::string tail;
-        if (big_n || big_size || big_off) {
-            const std::uint64_t record = f_.tell();
-            put32(tail, kSigEnd64);
-            put64(tail, 44);  // size of the remaining record
-            put16(tail, 45);
-            put16(tail, 45);
-            put32(tail, 0);  // this disk
-            put32(tail, 0);  // disk with the central directory
-            put64(tail, n);
-            put64(tail, n);
-            put64(tail, cd_size);
-            put64(tail, cd_offset);
-            put32(tail, kSigLocator64);
-            put32(tail, 0);  // disk with the ZIP64 end record
-            put64(tail, record);
-            put32(tail, 1);  // total number of disks
-        }
-        put32(tail, kSigEnd);
-        put16(tail, 0);
-        put16(tail, 0);
-        put16(tail, big_n ? 0xFFFF : static_cast<std::uint16_t>(n));
-        put16(tail, big_n ? 0xFFFF : static_cast<std::uint16_t>(n));
-        put32(tail, big_size ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(cd_size));
-        put32(tail, big_off ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(cd_offset));
-        put16(tail, 0);  // comment length
-        f_.write(tail.data(), tail.size());
-    }
-
-private:
-    struct Entry {
-        std::string name;
-        std::uint64_t offset = 0, usize = 0, csize = 0;
-        std::uint32_t crc = 0;
-        bool zip64_local = false;
-    };
-    AtomicFileWriter& f_;
-    NpzWriteOptions opt_;
-    std::vector<Entry> entries_;
-};
-
-// A 1-D array entry: preamble + n values of Out.
-template <class Out, class In>
-void add_array(ZipWriter& zip, const std::string& name, const std::string& descr, const In* values, std::size_t n) {
-    const std::string pre = npy_preamble(descr, "(" + std::to_string(n) + ",)");
-    zip.add(name, pre.size() + static_cast<std::uint64_t>(n) * sizeof(Out), [&](const Sink& sink) {
-        sink(pre.data(), pre.size());
-        emit_le<Out>(sink, values, n);
-    });
-}
-
-void write_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options) {
-    AtomicFileWriter file(path, "LTM file");
-    ZipWriter zip(file, options);
-    const std::size_t nz = T.nnz();
-    add_array<std::int32_t>(zip, "indices.npy", "<i4", T.indices.data(), nz);
-    if (nz < (std::size_t(1) << 31))
-        add_array<std::int32_t>(zip, "indptr.npy", "<i4", T.indptr.data(), T.indptr.size());
-    else
-        add_array<std::int64_t>(zip, "indptr.npy", "<i8", T.indptr.data(), T.indptr.size());
-    const std::string fmt_pre = npy_preamble("|S3", "()");
-    zip.add("format.npy", fmt_pre.size() + 3, [&](const Sink& sink) {
-        sink(fmt_pre.data(), fmt_pre.size());
-        sink("csr", 3);
-    });
-    const std::int64_t shape[2] = {T.rows, T.cols};
-    add_array<std::int64_t>(zip, "shape.npy", "<i8", shape, 2);
-    add_array<float>(zip, "data.npy", "<f4", T.data.data(), nz);
-    zip.finish();
-    file.commit();
-}
-
-}  // namespace
-
-void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options) {
-    const std::string invalid = T.check();
-    if (!invalid.empty()) throw std::runtime_error("cannot write LTM file '" + path + "': the matrix is invalid: " + invalid);
-    if (options.compression_level < 0 || options.compression_level > 9)
-        throw std::runtime_error("cannot write LTM file '" + path + "': compression level " +
-                                 std::to_string(options.compression_level) + " is outside 0..9");
-    try {
-        write_npz(path, T, options);
-    } catch (const std::bad_alloc&) {
-        throw std::runtime_error("cannot write LTM file '" + path + "': out of memory");
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Reading
-// ---------------------------------------------------------------------------------------------
-
-namespace {
 
 struct ReadError : std::runtime_error {
     using std::runtime_error::runtime_error;

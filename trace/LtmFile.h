@@ -4,7 +4,8 @@
 //
 // What write_ltm_npz writes (byte-for-byte deterministic: the same matrix and options always give
 // the same file):
-//   A ZIP archive of five .npy arrays, in this order (the order scipy.sparse.save_npz uses):
+//   An .npz archive (io/Npz.h, which writes it) of five .npy arrays, in this order (the order
+//   scipy.sparse.save_npz uses):
 //     indices.npy  '<i4', shape (nnz,)      column of each nonzero
 //     indptr.npy   '<i4', shape (rows + 1,) when nnz < 2^31, else '<i8' (scipy's own rule)
 //     format.npy   '|S3', shape ()          b'csr'
@@ -23,10 +24,10 @@
 //   locator. So files above 4 GiB are written in full (APPNOTE 6.3, as Python's zipfile reads).
 //   NpzWriteOptions::force_zip64 writes every ZIP64 field even for small files (used by tests).
 //
-// Writing is atomic: the archive is streamed into a new temporary file in the target's folder
-// (".<name>.tmp-<random>"), fsync'ed and renamed onto the path; on any failure the temporary is
-// removed and an existing file at the path is left untouched. The matrix is checked first
-// (CsrMatrix::check). Errors are std::runtime_error naming the path.
+// Writing is atomic (io/AtomicFile.h): the archive is streamed into a new temporary file in the
+// target's folder (".<name>.tmp-<random>"), fsync'ed and renamed onto the path; on any failure the
+// temporary is removed and an existing file at the path is left untouched. The matrix is checked
+// first (CsrMatrix::check). Errors are std::runtime_error "cannot write LTM file '<path>': ...".
 //
 // What read_ltm_npz reads: our files, and files written by scipy.sparse.save_npz for a CSR matrix,
 // compressed (the default; numpy writes every entry with ZIP64 local headers, "force_zip64") or
@@ -50,48 +51,15 @@
 #include <cstdint>
 #include <string>
 
+#include "io/Npz.h"
 #include "trace/CsrMatrix.h"
 
 namespace ltm {
 
-struct NpzWriteOptions {
-    int compression_level = 6;  // zlib level 0..9 (0: deflate with stored blocks)
-    bool force_zip64 = false;   // ZIP64 fields in every header and a ZIP64 end record
-};
+// Compression level and ZIP64 (io/Npz.h), under the name this header has always offered.
+using NpzWriteOptions = io::NpzWriteOptions;
 
 void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options = {});
 CsrMatrix read_ltm_npz(const std::string& path);
-
-// A file written atomically: bytes go to a new temporary file (created with O_EXCL, mode 0666
-// minus the umask) in the folder of `path`; commit() fsyncs it, closes it and renames it onto
-// `path`. Destroying an uncommitted AtomicFileWriter (e.g. during an exception) removes the
-// temporary. Every error is a std::runtime_error "cannot write <kind> '<path>': <reason>"; the
-// constructor fails when the folder does not exist (naming it) or is not writable.
-// Also used by features/Image.cpp (PNG, EXR).
-class AtomicFileWriter {
-public:
-    AtomicFileWriter(const std::string& path, const std::string& kind);
-    ~AtomicFileWriter();
-    AtomicFileWriter(const AtomicFileWriter&) = delete;
-    AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
-
-    // Writes at the current position and advances it (positions past the end extend the file).
-    void write(const void* bytes, std::size_t n);
-    std::uint64_t tell() const { return pos_; }
-    void seek(std::uint64_t pos) { pos_ = pos; }
-    void commit();
-    // Removes the temporary and throws "cannot write <kind> '<path>': <reason>".
-    [[noreturn]] void fail(const std::string& reason);
-
-    const std::string& path() const { return path_; }
-    const std::string& temporary_path() const { return tmp_; }
-
-private:
-    void discard() noexcept;
-    std::string path_, kind_, tmp_;
-    int fd_ = -1;
-    std::uint64_t pos_ = 0;
-    bool committed_ = false;
-};
 
 }  // namespace ltm

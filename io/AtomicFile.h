@@ -1,0 +1,108 @@
+#pragma once
+// The project's one way of writing a file or a folder so that it appears complete or not at all.
+//
+// What a reader of the target can see, whatever happens to the writer (an exception, the process
+// killed at any instant, the machine losing power):
+//   - the previous content of the path (or no file, if there was none), or
+//   - the complete new content,
+// never a mixture or a prefix. At most a temporary named ".<name>.tmp-..." is left beside the
+// target (only when the process died or the machine stopped; every failure that the process
+// survives removes it): AtomicFile::is_temporary_name and AtomicFolder::is_temporary_name
+// recognise these names, so that a later run can clean them up.
+//
+// What is durable when: nothing before commit(). Once commit() returns, the new content and its
+// name are on stable storage (the file's data and the rename are both fsync'ed, the latter by
+// syncing the containing folder), as far as the file system honours fsync. A crash *during*
+// commit() leaves the old or the new content at the path (rename(2) is atomic), never neither.
+//
+// Errors are std::runtime_error "cannot write <kind> '<path>': <reason>", where <kind> is what
+// the caller writes ("LTM file", "PNG image", "mesh") and <reason> names the folder or the
+// temporary file and the system's error text.
+//
+// All of this is POSIX (open O_EXCL, fsync, rename); the target's folder must be on a local file
+// system that implements rename atomically (every Linux one does; some network file systems only
+// approximately).
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace ltm::io {
+
+// A file written atomically.
+//
+// The bytes go to a new temporary file ".<name>.tmp-<16 hex digits>" in the folder of `path`,
+// created with O_EXCL (so it never clobbers anything, not even a concurrent writer's temporary)
+// and mode 0666 minus the umask, like any new file. commit() fsyncs it, closes it, renames it
+// onto `path` and fsyncs the folder. Destroying an AtomicFile that was not committed (e.g. while
+// an exception propagates) removes the temporary and leaves `path` as it was.
+//
+// The constructor fails when `path` is empty, its folder does not exist (the message names the
+// folder; it is never created), is not a folder or is not writable, or `path` is a folder.
+//
+// Two modes:
+//   Mode::Stream  the caller writes the bytes through write() (with tell() and seek(): OpenEXR
+//                 and the ZIP writer go back to patch headers).
+//   Mode::ByName  for libraries that insist on opening a file by name themselves: the temporary
+//                 file is created (empty, reserving its unique name) and closed; hand
+//                 temporary_path() to the library, let it write (it may truncate, rewrite or
+//                 even replace the file), then commit() as usual, which reopens it to fsync it.
+//                 write() is not available in this mode.
+//
+// Not thread-safe; one AtomicFile per writer. Not copyable or movable (the temporary's owner is
+// the object on the stack).
+class AtomicFile {
+public:
+    enum class Mode { Stream, ByName };
+
+    AtomicFile(const std::string& path, const std::string& kind, Mode mode = Mode::Stream);
+    ~AtomicFile();
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+
+    // Writes n bytes at the current position and advances it. Writing after a seek past the end
+    // extends the file (the gap reads as zeros). Mode::Stream only.
+    void write(const void* bytes, std::size_t n);
+    void write(std::string_view bytes) { write(bytes.data(), bytes.size()); }
+    std::uint64_t tell() const { return pos_; }
+    void seek(std::uint64_t pos) { pos_ = pos; }
+
+    // fsync, close, rename onto path(), fsync the folder. After it, the object holds nothing; any
+    // further write() or commit() is an error. If it throws, the temporary is gone and path() is as
+    // it was before, except when only the final folder sync failed (the message says so): then
+    // the new file is in place but its name may not survive a power loss.
+    void commit();
+
+    // Removes the temporary and throws "cannot write <kind> '<path>': <reason>"; for callers
+    // whose own step fails (a library reporting an error) so that their message has the same form.
+    [[noreturn]] void fail(const std::string& reason);
+
+    const std::string& path() const { return path_; }
+    const std::string& kind() const { return kind_; }
+    // The temporary file; empty once committed or failed.
+    const std::string& temporary_path() const { return tmp_; }
+
+    // True for the names this class gives its temporaries (".<name>.tmp-<16 hex digits>"; `filename`
+    // without a folder). A temporary that a running writer still owns has such a name too: clean
+    // up only where no other writer can be active.
+    static bool is_temporary_name(const std::string& filename);
+
+private:
+    void discard() noexcept;
+    std::string path_, kind_, tmp_;
+    Mode mode_;
+    int fd_ = -1;
+    std::uint64_t pos_ = 0;
+    bool live_ = false;  // a temporary exists that this object owns
+};
+
+// Writes `bytes` to `path` atomically, with `kind` in error messages (an AtomicFile written and
+// committed in one call).
+void write_file(const std::string& path, std::string_view bytes, const std::string& kind);
+
+// fsyncs the folder `path`, making the creation, renaming and removal of its entries durable.
+// Throws std::runtime_error "cannot sync folder '<path>': <reason>". A file system that cannot
+// sync folders at all (fsync fails with EINVAL) is not an error: nothing more can be done there.
+void fsync_folder(const std::string& path);
+
+}  // namespace ltm::io

@@ -1,0 +1,267 @@
+// Writing .npz archives (io/Npz.h): numpy reads back values, dtypes, shapes and C order; the
+// bytes are deterministic; bad arrays are refused before any file is touched.
+//
+// The numpy checks run /usr/bin/python3 (the `python3` on PATH may be another interpreter); they
+// are skipped, with the reason, when it cannot import numpy.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/Npz.h"
+#include "tests/TestSupport.h"
+
+namespace fs = std::filesystem;
+using ltm::io::NpyArray;
+using ltm::io::npy_array;
+using ltm::io::write_npz;
+using ltm::test::message_of;
+using ltm::test::slurp;
+
+namespace {
+
+const char* kPython = "/usr/bin/python3";
+
+class NpzTest : public ltm::test::LenientTempDirTest {
+protected:
+    // Runs `script` with /usr/bin/python3; returns its stdout (stderr goes to the test log).
+    std::string python(const std::string& script, int* status) {
+        const fs::path file = dir / "check.py";
+        ltm::test::spit(file, script);
+        FILE* p = ::popen((std::string(kPython) + " '" + file.string() + "'").c_str(), "r");
+        if (!p) {
+            *status = -1;
+            return {};
+        }
+        std::string out;
+        char buf[4096];
+        for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+        *status = ::pclose(p);
+        fs::remove(file);
+        return out;
+    }
+};
+
+// Empty if /usr/bin/python3 has numpy, else why not.
+const std::string& numpy_missing() {
+    static const std::string reason = [] {
+        if (::access(kPython, X_OK) != 0) return std::string(kPython) + " does not exist";
+        if (std::system((std::string(kPython) + " -c 'import numpy' > /dev/null 2>&1").c_str()) != 0)
+            return std::string(kPython) + " cannot import numpy";
+        return std::string();
+    }();
+    return reason;
+}
+#define REQUIRE_NUMPY()                                                \
+    do {                                                               \
+        if (!numpy_missing().empty()) GTEST_SKIP() << numpy_missing(); \
+    } while (0)
+
+std::vector<std::string> lines_of(const std::string& s) {
+    std::vector<std::string> out;
+    std::istringstream is(s);
+    for (std::string line; std::getline(is, line);) out.push_back(line);
+    return out;
+}
+
+// depth: float32 3 x 4, depth[r][c] = r + c / 4 - 0.5 (exact in binary, so Python prints it
+// exactly); stored row-major, so a transposed (Fortran-order) reading would show up.
+struct Sample {
+    std::vector<float> depth;
+    std::vector<std::uint16_t> mask = {0, 1, 2, 255, 256, 1000, 65534, 65535};
+    std::vector<std::int64_t> ids = {0, -1, std::numeric_limits<std::int64_t>::min(),
+                                     std::numeric_limits<std::int64_t>::max(), std::int64_t(1) << 40};
+    std::vector<std::int32_t> cube;  // 2 x 3 x 2
+    std::vector<std::uint8_t> none;  // an empty array, shape (0, 5)
+    std::string tag = "csr";
+    Sample() {
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c) depth.push_back(static_cast<float>(r) + static_cast<float>(c) / 4.0f - 0.5f);
+        for (int i = 0; i < 12; ++i) cube.push_back(i * i - 50);
+    }
+    std::vector<NpyArray> arrays() const {
+        return {npy_array("depth", depth, {3, 4}), npy_array("mask", mask, {2, 4}), npy_array("ids", ids),
+                npy_array("cube", cube, {2, 3, 2}), npy_array("none", none, {0, 5}),
+                ltm::io::npy_bytes_scalar("tag", tag)};
+    }
+};
+
+TEST_F(NpzTest, NumpyReadsValuesDtypesAndShapes) {
+    REQUIRE_NUMPY();
+    const Sample s;
+    for (bool z64 : {false, true}) {
+        SCOPED_TRACE(z64 ? "forced ZIP64" : "plain");
+        ltm::io::NpzWriteOptions o;
+        o.force_zip64 = z64;
+        write_npz(path("s.npz"), s.arrays(), o);
+        EXPECT_EQ(listing(), std::vector<std::string>{"s.npz"});
+        int status = 0;
+        const std::string out = python(R"(
+import zipfile, numpy as np
+f = ')" + path("s.npz") + R"('
+with zipfile.ZipFile(f) as z:
+    assert z.testzip() is None
+    print('entries', *[i.filename for i in z.infolist()])
+with np.load(f, allow_pickle=False) as a:
+    print('keys', *a.files)
+    for k in a.files:
+        v = a[k]
+        print(k, v.dtype.str, v.shape, v.flags['C_CONTIGUOUS'])
+    d = a['depth']
+    print('depth', *[d[r, c].item() for r in range(3) for c in range(4)])
+    print('mask', a['mask'].tolist())
+    print('ids', *a['ids'].tolist())
+    print('cube', a['cube'][1, 2, 1].item(), a['cube'][0, 1, 0].item())
+    print('tag', a['tag'].item())
+)",
+                                       &status);
+        ASSERT_EQ(status, 0) << out;
+        const std::vector<std::string> expected = {
+            "entries depth.npy mask.npy ids.npy cube.npy none.npy tag.npy",
+            "keys depth mask ids cube none tag",
+            "depth <f4 (3, 4) True",
+            "mask <u2 (2, 4) True",
+            "ids <i8 (5,) True",
+            "cube <i4 (2, 3, 2) True",
+            "none |u1 (0, 5) True",
+            "tag |S3 () True",
+            "depth -0.5 -0.25 0.0 0.25 0.5 0.75 1.0 1.25 1.5 1.75 2.0 2.25",
+            "mask [[0, 1, 2, 255], [256, 1000, 65534, 65535]]",
+            "ids 0 -1 -9223372036854775808 9223372036854775807 1099511627776",
+            "cube 71 -46",  // element (1, 2, 1) is 11: 121 - 50; (0, 1, 0) is 2: 4 - 50
+            "tag b'csr'",
+        };
+        EXPECT_EQ(lines_of(out), expected);
+    }
+}
+
+TEST_F(NpzTest, BytesAreDeterministicAndPreamblesAligned) {
+    const Sample s;
+    write_npz(path("a.npz"), s.arrays());
+    write_npz(path("b.npz"), s.arrays());
+    const std::string a = slurp(path("a.npz"));
+    EXPECT_EQ(a, slurp(path("b.npz")));
+    EXPECT_EQ(a.substr(0, 4), "PK\x03\x04");
+    // Level 0 stores the .npy bytes verbatim: the header of the 2-D array is readable in the file,
+    // padded to 64 bytes.
+    ltm::io::NpzWriteOptions stored;
+    stored.compression_level = 0;
+    write_npz(path("c.npz"), {npy_array("depth", s.depth, {3, 4})}, stored);
+    const std::string c = slurp(path("c.npz"));
+    const std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (3, 4), }";
+    const std::size_t at = c.find(header);
+    ASSERT_NE(at, std::string::npos);
+    EXPECT_EQ(c.substr(at - 10, 8), std::string("\x93NUMPY\x01\x00", 8));
+    const std::size_t len = static_cast<unsigned char>(c[at - 2]) | (static_cast<unsigned char>(c[at - 1]) << 8);
+    EXPECT_EQ((10 + len) % 64, 0u);
+    EXPECT_EQ(c[at - 10 + 10 + len - 1], '\n');
+}
+
+TEST_F(NpzTest, BadArraysAreRefusedBeforeAnyFileIsTouched) {
+    ltm::test::spit(dir / "keep.npz", "old");
+    const std::string p = path("keep.npz");
+    const std::vector<float> v = {1, 2, 3, 4, 5, 6};
+    const auto refused = [&](const std::vector<NpyArray>& arrays, const std::string& why) {
+        const std::string msg = message_of([&] { write_npz(p, arrays, {}, "test archive"); });
+        EXPECT_EQ(msg, "cannot write test archive '" + p + "': " + why);
+    };
+    refused({npy_array("v", v, {4, 2})},
+            "array 'v' has 24 bytes, but its shape (4, 2) of '<f4' needs 8 x 4");
+    refused({npy_array("v", v), npy_array("v", v)}, "two arrays are named 'v'");
+    refused({npy_array("", v)}, "array 0 has an empty name");
+    NpyArray odd = npy_array("odd", v);
+    odd.descr = "<c8";
+    refused({odd}, "array 'odd': unsupported dtype '<c8'; supported are '|b1', '<i1'..'<i8', '<u1'..'<u8', "
+                   "'<f2', '<f4', '<f8' (or '>' for big-endian; '|' for one byte) and '|S<n>'");
+    odd.descr = "|f4";
+    refused({odd}, "array 'odd': dtype '|f4' has the wrong byte-order character: '<' or '>' for multi-byte numbers");
+    ltm::io::NpzWriteOptions level;
+    level.compression_level = 10;
+    EXPECT_EQ(message_of([&] { write_npz(p, {npy_array("v", v)}, level); }),
+              "cannot write npz archive '" + p + "': compression level 10 is outside 0..9");
+    EXPECT_EQ(slurp(p), "old");
+    EXPECT_EQ(listing(), std::vector<std::string>{"keep.npz"});
+
+    const std::string nowhere = path("missing/x.npz");
+    EXPECT_EQ(message_of([&] { write_npz(nowhere, {npy_array("v", v)}); }),
+              "cannot write npz archive '" + nowhere + "': the folder '" + path("missing") + "' does not exist");
+}
+
+// npy_converted: int64 values stored as int32 (as ltm.npz stores indptr), over more than one 1 MiB
+// conversion block; a value that does not fit fails the write naming the array.
+TEST_F(NpzTest, ConvertedArraysHoldTheValuesAndRefuseOverflow) {
+    std::vector<std::int64_t> wide(300000);
+    for (std::size_t i = 0; i < wide.size(); ++i) wide[i] = static_cast<std::int64_t>(i) * 7 - 1000000;
+    const std::vector<std::int32_t> narrow(wide.begin(), wide.end());
+    ltm::io::NpzWriteOptions stored;
+    stored.compression_level = 0;
+    write_npz(path("c.npz"), {ltm::io::npy_converted<std::int32_t>("v", wide, {1000, 300})}, stored);
+    write_npz(path("d.npz"), {npy_array("v", narrow, {1000, 300})}, stored);
+    const std::string c = slurp(path("c.npz")), d = slurp(path("d.npz"));
+    // The same .npy bytes (the ZIP framing may differ: stored blocks follow the input's pieces).
+    const std::string header = "{'descr': '<i4', 'fortran_order': False, 'shape': (1000, 300), }";
+    ASSERT_NE(c.find(header), std::string::npos);
+    std::string payload(reinterpret_cast<const char*>(narrow.data()), narrow.size() * 4);
+    EXPECT_NE(c.find(payload.substr(0, 60000)), std::string::npos);
+    EXPECT_NE(d.find(payload.substr(0, 60000)), std::string::npos);
+
+    wide[123456] = std::int64_t(1) << 31;
+    ltm::test::spit(dir / "keep.npz", "old");
+    EXPECT_EQ(message_of([&] { write_npz(path("keep.npz"), {ltm::io::npy_converted<std::int32_t>("v", wide)}); }),
+              "cannot write npz archive '" + path("keep.npz") + "': array 'v': value 2147483648 at index 123456 "
+              "does not fit '<i4'");
+    EXPECT_EQ(slurp(path("keep.npz")), "old");
+    EXPECT_EQ(listing(), (std::vector<std::string>{"c.npz", "d.npz", "keep.npz"}));
+
+    // A producer that gives the wrong number of bytes.
+    NpyArray short_one{"s", "<u2", {4}, nullptr, 8, [](const ltm::io::NpySink& sink) { sink("abcdef", 6); }};
+    EXPECT_EQ(message_of([&] { write_npz(path("keep.npz"), {short_one}); }),
+              "cannot write npz archive '" + path("keep.npz") + "': entry 's.npy' was given 134 bytes, but its "
+              "shape and dtype need 136");
+    EXPECT_EQ(slurp(path("keep.npz")), "old");
+}
+
+TEST_F(NpzTest, ConvertedArraysReadBackInNumpy) {
+    REQUIRE_NUMPY();
+    const std::vector<std::int64_t> wide = {-5, 0, 2147483647, -2147483648LL};
+    const std::vector<double> doubles = {0.5, 1.0 / 3.0};
+    write_npz(path("e.npz"), {ltm::io::npy_converted<std::int32_t>("i", wide),
+                              ltm::io::npy_converted<float>("f", doubles, {1, 2})});
+    int status = 0;
+    const std::string out = python(R"(
+import numpy as np
+a = np.load(')" + path("e.npz") + R"(')
+print(a['i'].dtype.str, a['i'].tolist())
+print(a['f'].dtype.str, a['f'].shape, a['f'][0, 1] == np.float32(1.0 / 3.0))
+)",
+                                   &status);
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_EQ(out, "<i4 [-5, 0, 2147483647, -2147483648]\n<f4 (1, 2) True\n");
+}
+
+// A big-endian descr: the writer swaps the host's (little-endian) values, numpy reads the same
+// numbers.
+TEST_F(NpzTest, BigEndianDescrsHoldTheSameValues) {
+    REQUIRE_NUMPY();
+    const std::vector<std::int32_t> v = {1, -2, 70000};
+    NpyArray big = npy_array("big", v);
+    big.descr = ">i4";
+    write_npz(path("e.npz"), {big});
+    int status = 0;
+    const std::string out = python(R"(
+import numpy as np
+a = np.load(')" + path("e.npz") + R"(')['big']
+print(a.dtype.str, a.tolist())
+)",
+                                   &status);
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_EQ(out, ">i4 [1, -2, 70000]\n");
+}
+
+}  // namespace
