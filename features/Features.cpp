@@ -228,9 +228,11 @@ void row_features(const Setup& s, std::int64_t r, Scratch& w) {
     s.out[kMeanX][k] = static_cast<float>(mean_x);
     s.out[kMeanY][k] = static_cast<float>(mean_y);
     if (s.reference) {
+        // From the stored (float) means, so that a row equal to its reference row gives exactly 0.
+        const double mx = static_cast<double>(s.out[kMeanX][k]), my = static_cast<double>(s.out[kMeanY][k]);
         const double rx = static_cast<double>((*s.reference)[2 * k]);
         const double ry = static_cast<double>((*s.reference)[2 * k + 1]);
-        double dx = mean_x - rx, dy = mean_y - ry, d = std::hypot(dx, dy);
+        double dx = mx - rx, dy = my - ry, d = std::hypot(dx, dy);
         if (std::isnan(dx) || std::isnan(dy)) dx = dy = d = kNaN;  // hypot(NaN, inf) would be inf
         s.out[kDeflectionX][k] = static_cast<float>(dx);
         s.out[kDeflectionY][k] = static_cast<float>(dy);
@@ -347,6 +349,28 @@ FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camer
         for (std::int64_t r = range.begin(); r != range.end(); ++r) row_features(s, r, w);
     });
     return out;
+}
+
+void add_deflection(FeatureImages& f, const std::vector<float>& ref) {
+    const std::size_t n = static_cast<std::size_t>(f.width) * static_cast<std::size_t>(f.height);
+    if (f.has("Deflection") || !f.has("MeanX") || !f.has("MeanY") || ref.size() != 2 * n)
+        throw std::invalid_argument("add_deflection: expected features without Deflection and 2 reference values per pixel (" +
+                                    std::to_string(2 * n) + "), got " + std::to_string(ref.size()));
+    const std::vector<float>& mx = f.channel("MeanX");
+    const std::vector<float>& my = f.channel("MeanY");
+    std::vector<float> ox(n), oy(n), od(n);
+    for (std::size_t k = 0; k < n; ++k) {
+        double dx = static_cast<double>(mx[k]) - static_cast<double>(ref[2 * k]);
+        double dy = static_cast<double>(my[k]) - static_cast<double>(ref[2 * k + 1]);
+        double d = std::hypot(dx, dy);
+        if (std::isnan(dx) || std::isnan(dy)) dx = dy = d = kNaN;
+        ox[k] = static_cast<float>(dx);
+        oy[k] = static_cast<float>(dy);
+        od[k] = static_cast<float>(d);
+    }
+    f.channels.emplace_back("DeflectionX", std::move(ox));
+    f.channels.emplace_back("DeflectionY", std::move(oy));
+    f.channels.emplace_back("Deflection", std::move(od));
 }
 
 std::vector<double> apply_pattern(const CsrMatrix& T, const std::vector<float>& x) {

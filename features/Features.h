@@ -48,8 +48,9 @@
 //                     (p, q) has its centre at x = -W/2 + (q + 0.5) W/Q, y = H/2 - (p + 0.5) H/P);
 //                     NaN for an empty row.
 // With a reference (the defect-free object's MeanX, MeanY per camera pixel):
-//  DeflectionX,       mean - reference in mm, and its length; NaN where the row is empty or the
-//  DeflectionY,       reference is NaN.
+//  DeflectionX,       mean - reference in mm (MeanX, MeanY as stored, in float, minus the
+//  DeflectionY,       reference: a row whose means equal the reference's gives exactly 0), and
+//                     its length; NaN where the row is empty or the reference is NaN.
 //  Deflection
 //
 // Every per-row quantity is computed in double and stored as float (counts and index differences
@@ -101,6 +102,11 @@ const std::vector<std::string>& feature_channel_names(bool with_reference);
 // 0 <= dark_block <= min(P, Q), and reference_mean (if given) has 2 N M values.
 FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camera_rows, const DisplayGrid& display,
                                const FeatureOptions& options, const std::vector<float>* reference_mean = nullptr);
+
+// Appends DeflectionX, DeflectionY and Deflection to features computed without a reference, from
+// their MeanX and MeanY: exactly the values compute_features gives with `reference_mean`.
+// Throws std::invalid_argument if the channels are already there or the sizes do not match.
+void add_deflection(FeatureImages& features, const std::vector<float>& reference_mean);
 
 // y = T x (CsrMatrix::multiply: each y[k] accumulated in double in column order, deterministic).
 // Throws std::invalid_argument if x does not have T.cols values or T is not a valid CSR matrix.

@@ -348,6 +348,27 @@ TEST(FeatureRows, DeflectionAgainstReference) {
         for (const char* name : {"DeflectionX", "DeflectionY", "Deflection"})
             EXPECT_TRUE(std::isnan(at(f, name, k))) << name << ' ' << k;
     EXPECT_FALSE(std::isnan(at(f, "MeanY", 1)));
+    // add_deflection on the features without a reference gives the same bits.
+    FeatureImages g = compute_features(T, 3, 1, grid(10, 10), opts());
+    add_deflection(g, ref);
+    for (const char* name : {"DeflectionX", "DeflectionY", "Deflection"})
+        for (std::size_t k = 0; k < 3; ++k) {
+            const float a = at(f, name, k), b = at(g, name, k);
+            EXPECT_TRUE((std::isnan(a) && std::isnan(b)) || a == b) << name << ' ' << k;
+        }
+    EXPECT_THROW(add_deflection(g, ref), std::invalid_argument);  // already there
+}
+
+// A row whose means are its own reference has a deflection of exactly 0 (not a float rounding
+// of the double mean): the deflection map of a defect-free region is noise-free by construction.
+TEST(FeatureRows, ARowAgainstItsOwnMeansHasZeroDeflection) {
+    const CsrMatrix T = make(10, 10, {{{2, 7, 0.3f}, {3, 1, 0.1f}, {9, 9, 0.05f}}});
+    const FeatureImages f0 = compute_features(T, 1, 1, grid(10, 10), opts());
+    const std::vector<float> ref = {f0.channel("MeanX")[0], f0.channel("MeanY")[0]};
+    const FeatureImages f = compute_features(T, 1, 1, grid(10, 10), opts(), &ref);
+    EXPECT_EQ(at(f, "DeflectionX", 0), 0.0f);
+    EXPECT_EQ(at(f, "DeflectionY", 0), 0.0f);
+    EXPECT_EQ(at(f, "Deflection", 0), 0.0f);
 }
 
 // ---- a seeded random matrix against a direct reference ----
