@@ -88,7 +88,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             throw std::invalid_argument("render: the pixel subset must be ascending camera pixels in [0, " +
                                         std::to_string(K) + ")");
     }
-    const int D = opt.track_defects ? std::min(static_cast<int>(scene.defects.size()), kTrackedDefects) : 0;
+
     if (pattern && static_cast<long>(opt.pattern->size()) != L)
         throw std::invalid_argument("the pattern has " + std::to_string(opt.pattern->size()) +
                                     " values but the display has " + std::to_string(L) + " pixels");
@@ -99,22 +99,20 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         out.image.assign(static_cast<size_t>(K), 0.0);
         out.image_stderr.assign(static_cast<size_t>(K), 0.0);
     }
-    if (opt.track_defects) {
-        out.tracked_defects = D;
-        out.defect_paths.assign(static_cast<size_t>(K) * static_cast<size_t>(D), 0);
-    }
+    out.tracked_defects = opt.track_defects;
     const long blocks = (items + kBlock - 1) / kBlock;
     std::vector<PathStats> block_stats(static_cast<size_t>(blocks));
+    std::vector<std::vector<DefectPaths>> block_defects(opt.track_defects ? static_cast<size_t>(blocks) : 0);
     Progress progress(opt.progress, items, spp);
 
     auto render_block = [&](long b) {
         PathStats& stats = block_stats[static_cast<size_t>(b)];
         std::vector<Entry> entries;
         entries.reserve(static_cast<size_t>(spp));
-        for (long i = b * kBlock; i < std::min(items, (b + 1) * kBlock); ++i) {
-            const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(i)] : i;
+        for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
+            const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
             const std::vector<int> perm = cam.permutation(k, seed);
-            std::uint32_t* hits = D > 0 ? &out.defect_paths[static_cast<size_t>(k) * static_cast<size_t>(D)] : nullptr;
+            const size_t first_count = opt.track_defects ? block_defects[static_cast<size_t>(b)].size() : 0;
             entries.clear();
             double sum = 0, sum2 = 0;
             for (int s = 0; s < spp; ++s) {
@@ -122,7 +120,15 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 Vec3 o, d;
                 cam.sample(k, s, perm, rng, o, d);
                 const PathResult r = tracer.sample_path(o, d, rng, stats);
-                for (std::uint64_t m = hits ? r.defects : 0; m != 0; m &= m - 1) ++hits[__builtin_ctzll(m)];
+                if (opt.track_defects && r.defect >= 0) {
+                    auto& list = block_defects[static_cast<size_t>(b)];
+                    auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
+                                           [&](const DefectPaths& e) { return e.defect == r.defect; });
+                    if (it == list.end())
+                        list.push_back({static_cast<std::int32_t>(k), r.defect, 1});
+                    else
+                        ++it->paths;
+                }
                 if (r.pixel < 0) continue;
                 if (pattern) {
                     const double f = r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
@@ -131,6 +137,11 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 } else {
                     entries.push_back({static_cast<std::int32_t>(r.pixel), r.weight});
                 }
+            }
+            if (opt.track_defects) {
+                auto& list = block_defects[static_cast<size_t>(b)];
+                std::sort(list.begin() + static_cast<long>(first_count), list.end(),
+                          [](const DefectPaths& a, const DefectPaths& c) { return a.defect < c.defect; });
             }
             if (pattern) {
                 const double n = spp, mean = sum / n;
@@ -163,6 +174,10 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         all_blocks();
     }
     for (const auto& s : block_stats) out.stats.merge(s);
+    for (auto& list : block_defects) {
+        out.defect_paths.insert(out.defect_paths.end(), list.begin(), list.end());
+        std::vector<DefectPaths>().swap(list);
+    }
 
     if (!pattern) {
         CsrMatrix& T = out.T;

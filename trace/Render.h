@@ -21,6 +21,12 @@
 
 namespace ltm {
 
+struct DefectPaths {
+    std::int32_t pixel;   // camera pixel k
+    std::int32_t defect;  // index into the scene's defects
+    std::uint32_t paths;  // samples of pixel k whose path met this defect first
+};
+
 struct RenderOptions {
     int threads = 0;                          // 0: the caller's task arena; n > 0: an arena of n threads
     bool progress = false;                    // progress bar with paths/s and ETA on stderr
@@ -31,8 +37,8 @@ struct RenderOptions {
     // Only these camera pixels (ascending, each once); the rows (image values) of the others stay
     // empty (zero). Each rendered pixel gets exactly the values a full render gives it.
     const std::vector<long>* pixels = nullptr;
-    // Count, per camera pixel and defect, the samples whose path interacted with the defect
-    // (PathResult::defects): the ground truth of where each defect is seen (study/GroundTruth.h).
+    // Count, per camera pixel and defect, the samples whose path met the defect first
+    // (PathResult::defect): the ground truth of where each defect is seen (study/GroundTruth.h).
     bool track_defects = false;
 };
 
@@ -40,15 +46,23 @@ struct RenderResult {
     CsrMatrix T;                         // without a pattern
     std::vector<double> image;           // with a pattern: y per camera pixel ...
     std::vector<double> image_stderr;    // ... and its Monte Carlo standard error
-    // track_defects: defect_paths[k * tracked_defects + j] = how many of pixel k's samples met
-    // defect j, for the first tracked_defects = min(defects, kTrackedDefects) defects.
-    int tracked_defects = 0;
-    std::vector<std::uint32_t> defect_paths;
+    // track_defects: how many of each pixel's samples met each defect first, for the pairs with at
+    // least one (sorted by pixel, then defect); memory grows with the defects' images only.
+    bool tracked_defects = false;
+    std::vector<DefectPaths> defect_paths;
     PathStats stats;
     double seconds = 0;
 };
 
 RenderResult render(const Tracer& tracer, const RenderOptions& options);
+
+// defect_paths as a dense pixels x defects table: [k * defects + j].
+inline std::vector<std::uint32_t> dense_defect_paths(const RenderResult& r, long pixels, int defects) {
+    std::vector<std::uint32_t> out(static_cast<size_t>(pixels) * static_cast<size_t>(defects), 0);
+    for (const DefectPaths& e : r.defect_paths)
+        out[static_cast<size_t>(e.pixel) * static_cast<size_t>(defects) + static_cast<size_t>(e.defect)] = e.paths;
+    return out;
+}
 
 // The seed a render with these options uses (scene.seed, or mixed with options.stream).
 std::uint64_t render_seed(const Scene& scene, const RenderOptions& options);

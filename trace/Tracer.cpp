@@ -94,7 +94,7 @@ struct Tracer::State {
     // Left a convex object through one of its own faces into the outside air: nothing of the
     // object (whose defects all lie inside it) can be met again.
     bool escaped = false;
-    std::uint64_t defects = 0;  // PathResult::defects
+    int defect = -1;  // PathResult::defect
 };
 
 Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
@@ -584,10 +584,10 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
             st.weight *= keep;
         }
         const SurfaceInfo& s = table[h.tag];
-        if (s.optical && s.defect >= 0 && s.defect < kTrackedDefects) st.defects |= std::uint64_t{1} << s.defect;
-        if (const int k = st.medium.defect(); k >= 0 && k < kTrackedDefects && !(st.defects >> k & 1)) {
-            const Defect& d = scene_.defects[static_cast<size_t>(k)];
-            if (d.segment_min_rho2(st.o, h.p) < 1.0) st.defects |= std::uint64_t{1} << k;
+        if (st.defect < 0) {  // the segment through a smooth inclusion comes before the surface ending it
+            const int k = st.medium.defect();
+            if (k >= 0 && scene_.defects[static_cast<size_t>(k)].segment_min_rho2(st.o, h.p) < 1.0) st.defect = k;
+            else if (s.optical && s.defect >= 0) st.defect = s.defect;
         }
         const Vec3& d_in = h.d_in;
         const bool entering = dot(d_in, h.n_out) < 0;  // crossing from `outside` into `inside`
@@ -728,7 +728,7 @@ PathResult Tracer::sample_path(const Vec3& origin, const Vec3& direction, Rng& r
     st.medium = Medium::Air;
     run<false>(st, &rng, stats, nullptr);
     PathResult r;
-    r.defects = st.defects;
+    r.defect = st.defect;
     if (st.weight == 0) return r;
     if (st.d.z <= 0) {
         ++stats.toward_camera;

@@ -84,14 +84,14 @@ struct PrincipalPath {
 struct PathResult {
     long pixel = -1;   // display pixel l, or -1
     double weight = 0;
-    // Bit k: the path interacted with defect k (k < kTrackedDefects), whether or not it reached
-    // the display. Interacting means meeting one of the defect's optical surfaces (a bubble or
-    // particle wall, a scratch's groove, a uniform inclusion's interface) or, for a smooth
-    // inhomogeneity (no surface), passing through the ellipsoid where its index differs from the
-    // glass's (rho < 1 along the chord of each segment inside its region).
-    std::uint64_t defects = 0;
+    // The first defect the path met (an index into the scene's defects), or -1, whether or not
+    // the path then reached the display. Meeting a defect: hitting one of its optical surfaces (a
+    // bubble or particle wall, a scratch's groove, a uniform inclusion's interface) or, for a
+    // smooth inhomogeneity (no surface), passing where its index differs from the glass's
+    // (rho < 1 on the chord of a segment inside its region). The first one counts: a path a
+    // bubble scatters carries the bubble's signal wherever it goes next.
+    int defect = -1;
 };
-inline constexpr int kTrackedDefects = 64;
 
 class Tracer {
 public:
