@@ -13,7 +13,6 @@
 #include "io/AtomicFile.h"
 #include "app/Commands.h"
 #include "scene/SceneJson.h"
-#include "scene/SceneSolid.h"
 #include "trace/LtmFile.h"
 
 namespace ltm::app {
@@ -67,33 +66,35 @@ void write_run_json(const std::string& dir, const Scene& scene, const RenderResu
     io::write_file((fs::path(dir) / "run.json").string(), run_json, "run record");
 }
 
-FeatureImages write_render_folder(const std::string& dir, const Scene& scene, const RenderResult& r,
-                                  Representation representation, int threads, const FeatureOptions& options,
-                                  const std::vector<float>& reference, StageReport& report) {
+void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
+                         StageReport& report) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     const fs::path d(dir);
     std::vector<fs::path> written;
+    const RenderResult& r = run.render;
     try {
         StageTimer t_write(&report, "write");
         write_ltm_npz((d / "ltm.npz").string(), r.T);
         written.push_back(d / "ltm.npz");
         if (!scene.defects.empty()) {
-            std::vector<float> mx(reference.size() / 2), my(reference.size() / 2);
+            std::vector<float> mx(run.reference.size() / 2), my(run.reference.size() / 2);
             for (size_t k = 0; k < mx.size(); ++k) {
-                mx[k] = reference[2 * k];
-                my[k] = reference[2 * k + 1];
+                mx[k] = run.reference[2 * k];
+                my[k] = run.reference[2 * k + 1];
             }
             write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
                       {{"MeanX", mx}, {"MeanY", my}});
             written.push_back(d / "reference.exr");
         }
         written.push_back(d / "features.exr");
-        FeatureImages f = write_features(dir, r.T, render_geometry(scene), options, reference.empty() ? nullptr : &reference);
+        written.push_back(d / "features.npz");
+        write_feature_images(dir, run.features);
         t_write.done(dir);
-        write_run_json(dir, scene, r, representation, threads,
-                       fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}}}", r.T.rows, r.T.cols, r.T.nnz()), report);
-        return f;
+        write_run_json(dir, scene, r, run.representation, threads,
+                       fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}, \"reference_pixels\": {}}}", r.T.rows,
+                                   r.T.cols, r.T.nnz(), run.reference_pixels),
+                       report);
     } catch (...) {
         for (const auto& p : written) fs::remove(p, ec);
         throw;
@@ -103,31 +104,6 @@ FeatureImages write_render_folder(const std::string& dir, const Scene& scene, co
 RenderGeometry render_geometry(const Scene& s) {
     return {s.camera.resolution[0], s.camera.resolution[1],
             {s.display.resolution[0], s.display.resolution[1], s.display.size[0], s.display.size[1]}};
-}
-
-std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& own_T, Representation representation,
-                                         const RenderOptions& options) {
-    CsrMatrix free_T;
-    if (!scene.defects.empty()) {
-        const Scene free = defect_free(scene);
-        const Solid free_solid = build_solid(free, nullptr, representation != Representation::MeshOnly);
-        TracerOptions o;
-        o.representation = representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
-        free_T = render(Tracer(free, free_solid, o), options).T;
-    }
-    const RenderGeometry g = render_geometry(scene);
-    FeatureOptions means_only;
-    means_only.dark_block = 0;  // only MeanX and MeanY are used
-    const FeatureImages m = compute_features(scene.defects.empty() ? own_T : free_T, g.camera_columns, g.camera_rows,
-                                             g.display, means_only, nullptr);
-    const auto& mx = m.channel("MeanX");
-    const auto& my = m.channel("MeanY");
-    std::vector<float> ref(2 * mx.size());
-    for (size_t k = 0; k < mx.size(); ++k) {
-        ref[2 * k] = mx[k];
-        ref[2 * k + 1] = my[k];
-    }
-    return ref;
 }
 
 RenderGeometry read_render_geometry(const std::string& dir) {
@@ -181,14 +157,19 @@ FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const R
     FeatureOptions o = options;
     if (o.dark_block < 0) o.dark_block = std::min({60, g.display.P, g.display.Q});  // automatic
     const FeatureImages f = compute_features(T, g.camera_columns, g.camera_rows, g.display, o, reference);
+    write_feature_images(dir, f);
+    return f;
+}
+
+void write_feature_images(const std::string& dir, const FeatureImages& f) {
     write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);
+    write_npz_channels((fs::path(dir) / "features.npz").string(), f.width, f.height, f.channels);
     const fs::path pngs = fs::path(dir) / "features";
     fs::create_directories(pngs);
     // Pseudo colour, scaled so a 100-pixel-wide image is ~400 pixels wide.
     const int scale = std::max(1, 400 / std::max(1, f.width));
     for (const auto& [name, values] : f.channels)
         write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, name, NAN, NAN, scale);
-    return f;
 }
 
 }  // namespace ltm::app

@@ -10,6 +10,7 @@
 #include "scene/Scene.h"
 #include "trace/CsrMatrix.h"
 #include "geometry/StageReport.h"
+#include "study/SceneRun.h"
 #include "trace/Render.h"
 
 namespace ltm::app {
@@ -22,25 +23,16 @@ struct RenderGeometry {
 
 RenderGeometry render_geometry(const Scene& scene);
 
-// The reference the deflection map is measured against: the mean display position (x, y in mm,
-// two floats per camera pixel) of the defect-free object. For a scene with defects it is the
-// scene without them, rendered with the same random numbers (`options`), so wherever no path of a
-// pixel touches a defect both renders trace the same paths; a defect-free scene is its own
-// reference (`own_T`, its deflection map is zero by definition).
-std::vector<float> defect_free_reference(const Scene& scene, const CsrMatrix& own_T, Representation representation,
-                                         const RenderOptions& options);
-
 // DIR/run.json: the resolved scene, seed, version, representation, timings and path statistics;
 // `result` is a JSON object describing what was rendered.
 void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
                     int threads, const std::string& result, const StageReport& report);
 
 // A render folder: DIR/ltm.npz, DIR/reference.exr (for a scene with defects), DIR/features.exr
-// with DIR/features/*.png, and DIR/run.json (written last). On failure the files this call wrote
-// are removed and the exception rethrown. Returns the feature images.
-FeatureImages write_render_folder(const std::string& dir, const Scene& scene, const RenderResult& r,
-                                  Representation representation, int threads, const FeatureOptions& options,
-                                  const std::vector<float>& reference, StageReport& report);
+// and DIR/features.npz with DIR/features/*.png, and DIR/run.json (written last). On failure the
+// files this call wrote are removed and the exception rethrown.
+void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
+                         StageReport& report);
 
 // Reads the camera and display from DIR/run.json; throws std::runtime_error naming the file.
 RenderGeometry read_render_geometry(const std::string& dir);
@@ -48,9 +40,13 @@ RenderGeometry read_render_geometry(const std::string& dir);
 // Reads DIR/reference.exr (MeanX, MeanY of the defect-free object), if present.
 std::optional<std::vector<float>> read_reference(const std::string& dir, int camera_pixels);
 
-// Computes the features and writes features.exr and the PNGs; returns the images. A negative
+// Computes the features and writes them (write_feature_images); returns the images. A negative
 // options.dark_block means automatic: 60 display pixels, or the display's smaller side if less.
 FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
                              const FeatureOptions& options, const std::vector<float>* reference);
+
+// DIR/features.exr (one FLOAT channel per image), DIR/features.npz (the same channels as float32
+// arrays of shape (rows, columns), for numpy without an EXR reader) and DIR/features/<name>.png.
+void write_feature_images(const std::string& dir, const FeatureImages& f);
 
 }  // namespace ltm::app

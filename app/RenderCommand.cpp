@@ -10,6 +10,7 @@
 #include "features/Image.h"
 #include "scene/SceneJson.h"
 #include "trace/LtmFile.h"
+#include "study/SceneRun.h"
 #include "trace/Render.h"
 
 namespace ltm::app {
@@ -27,8 +28,9 @@ struct RenderArgs {
 
 int run(const RenderArgs& a) {
     if (!output_folder_ok("render", a.dir)) return 2;
-    std::vector<std::string> outputs = a.pattern.empty() ? std::vector<std::string>{"ltm.npz", "run.json", "features.exr"}
-                                                          : std::vector<std::string>{"image.exr", "image.png", "run.json"};
+    std::vector<std::string> outputs = a.pattern.empty()
+                                           ? std::vector<std::string>{"ltm.npz", "run.json", "features.exr", "features.npz"}
+                                           : std::vector<std::string>{"image.exr", "image.npz", "image.png", "run.json"};
     if (!a.overwrite)
         for (const auto& f : outputs)
             if (fs::exists(fs::path(a.dir) / f)) {
@@ -66,47 +68,50 @@ int run(const RenderArgs& a) {
         }
     }
 
-    TracerOptions topt;
-    topt.robust = !a.no_robust;
+    Representation representation = Representation::Analytic;
     std::string why;
-    if (a.representation == "auto")
-        topt.representation = Tracer::analytic_supported(loaded->solid, &why) ? Representation::Analytic : Representation::Refined;
-    else if (a.representation == "refined") topt.representation = Representation::Refined;
-    else if (a.representation == "mesh-only") topt.representation = Representation::MeshOnly;
-    else {
-        if (!Tracer::analytic_supported(loaded->solid, &why)) {
-            std::cerr << fmt::format("ltmsim render: {}: the analytic representation {}; use --representation refined\n",
-                                     scene.source, why);
-            return 2;
-        }
-        topt.representation = Representation::Analytic;
+    if (a.representation == "auto") representation = auto_representation(loaded->solid);
+    else if (a.representation == "refined") representation = Representation::Refined;
+    else if (a.representation == "mesh-only") representation = Representation::MeshOnly;
+    else if (!Tracer::analytic_supported(loaded->solid, &why)) {
+        std::cerr << fmt::format("ltmsim render: {}: the analytic representation {}; use --representation refined\n",
+                                 scene.source, why);
+        return 2;
     }
-    StageTimer t_setup(&report, "trace-setup");
-    const Tracer tracer(scene, loaded->solid, topt);
-    t_setup.done(to_string(topt.representation));
 
-    RenderOptions ropt;
-    ropt.threads = a.threads;
-    ropt.progress = true;
-    ropt.pattern = pattern.empty() ? nullptr : &pattern;
-    StageTimer t_render(&report, "render");
-    const RenderResult r = render(tracer, ropt);
-    t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", r.stats.paths, r.stats.segments,
-                              r.stats.paths / std::max(r.seconds, 1e-9) / 1e6));
-
-    // For a scene with defects, the defect-free object rendered with the same random numbers:
-    // away from the defects its paths are the very same, so the deflection map (mean display
-    // position minus the reference's) is exactly zero there, free of sampling noise.
-    std::vector<float> reference;
+    SceneRun run;
     if (pattern.empty()) {
-        StageTimer t_ref(&report, "reference");
-        reference = defect_free_reference(scene, r.T, topt.representation, ropt);
-        t_ref.done(scene.defects.empty() ? "the scene itself (defect-free)" : "defect-free object, common random numbers");
+        // The matrix, its features and, for a scene with defects, the defect-free reference
+        // (study/SceneRun.h): pixels whose paths met no defect are their own reference.
+        SceneRunOptions so;
+        so.representation = representation;
+        so.robust = !a.no_robust;
+        so.threads = a.threads;
+        so.progress = true;
+        so.features = a.features;
+        run = run_scene(scene, loaded->solid, so, &report);
+    } else {
+        TracerOptions topt;
+        topt.robust = !a.no_robust;
+        topt.representation = representation;
+        StageTimer t_setup(&report, "trace-setup");
+        const Tracer tracer(scene, loaded->solid, topt);
+        t_setup.done(to_string(topt.representation));
+        RenderOptions ropt;
+        ropt.threads = a.threads;
+        ropt.progress = true;
+        ropt.pattern = &pattern;
+        StageTimer t_render(&report, "render");
+        run.render = render(tracer, ropt);
+        run.representation = representation;
+        t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", run.render.stats.paths,
+                                  run.render.stats.segments, run.render.stats.paths / std::max(run.render.seconds, 1e-9) / 1e6));
     }
+    const RenderResult& r = run.render;
 
     try {
         if (pattern.empty()) {
-            write_render_folder(a.dir, scene, r, topt.representation, a.threads, a.features, reference, report);
+            write_render_folder(a.dir, scene, run, a.threads, report);
         } else {
             std::error_code ec;
             fs::create_directories(a.dir, ec);
@@ -117,6 +122,8 @@ int run(const RenderArgs& a) {
             try {
                 write_exr((dir / "image.exr").string(), N, M, {{"Image", y}, {"StdError", se}});
                 written.push_back(dir / "image.exr");
+                write_npz_channels((dir / "image.npz").string(), N, M, {{"Image", y}, {"StdError", se}});
+                written.push_back(dir / "image.npz");
                 Image preview;
                 preview.width = N;
                 preview.height = M;
@@ -126,7 +133,7 @@ int run(const RenderArgs& a) {
                 for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
                 write_png((dir / "image.png").string(), preview);
                 written.push_back(dir / "image.png");
-                write_run_json(a.dir, scene, r, topt.representation, a.threads,
+                write_run_json(a.dir, scene, r, representation, a.threads,
                                fmt::format("{{\"pattern\": {}, \"image\": \"image.exr\"}}", json_string(a.pattern)),
                                report);
             } catch (...) {

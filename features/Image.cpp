@@ -23,6 +23,7 @@
 #include <sys/stat.h>
 
 #include "io/AtomicFile.h"
+#include "io/Npz.h"
 
 namespace ltm {
 
@@ -429,6 +430,19 @@ void write_exr(const std::string& path, int width, int height,
         if (!os.error().empty()) throw std::runtime_error(os.error());
     }
     file.commit();
+}
+
+void write_npz_channels(const std::string& path, int width, int height,
+                        const std::vector<std::pair<std::string, std::vector<float>>>& channels) {
+    const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    std::vector<io::NpyArray> arrays;
+    for (const auto& [name, values] : channels) {
+        if (values.size() != n)
+            throw std::invalid_argument("write_npz_channels: channel '" + name + "' has " + std::to_string(values.size()) +
+                                        " values, expected " + std::to_string(n));
+        arrays.push_back(io::npy_array(name, values, {static_cast<std::uint64_t>(height), static_cast<std::uint64_t>(width)}));
+    }
+    io::write_npz(path, arrays, {}, "npz image");
 }
 
 }  // namespace ltm

@@ -76,6 +76,12 @@ void write_png16(const std::string& path, int width, int height, const std::vect
 void write_exr(const std::string& path, int width, int height,
                const std::vector<std::pair<std::string, std::vector<float>>>& channels);
 
+// The same channels as a numpy .npz archive (io/Npz.h): one float32 array of shape (height,
+// width) per channel, named as the channel, in C order (row 0 on top), so that numpy reads an
+// image without an EXR library: numpy.load(path)["BrightField"]. Deflate level 6. Atomic.
+void write_npz_channels(const std::string& path, int width, int height,
+                        const std::vector<std::pair<std::string, std::vector<float>>>& channels);
+
 // Every channel of an OpenEXR file (see read_image for what is accepted), converted to float, in
 // the file's channel order, which OpenEXR always stores sorted by name (so the order written by
 // write_exr is not kept, only the names). width and height receive the data window's size

@@ -1,0 +1,100 @@
+#include "study/SceneRun.h"
+
+#include <algorithm>
+#include <fmt/format.h>
+#include <stdexcept>
+
+#include "scene/SceneSolid.h"
+
+namespace ltm {
+
+Representation auto_representation(const Solid& solid) {
+    return Tracer::analytic_supported(solid, nullptr) ? Representation::Analytic : Representation::Refined;
+}
+
+DisplayGrid display_grid(const Scene& s) {
+    return {s.display.resolution[0], s.display.resolution[1], s.display.size[0], s.display.size[1]};
+}
+
+FeatureOptions resolved_feature_options(const Scene& s, FeatureOptions o) {
+    if (o.dark_block < 0) o.dark_block = std::min({60, s.display.resolution[0], s.display.resolution[1]});
+    return o;
+}
+
+std::vector<float> defect_free_reference(const Scene& scene, const RenderResult& own, const std::vector<float>& mx,
+                                         const std::vector<float>& my, Representation representation,
+                                         const RenderOptions& options, long* rendered_pixels) {
+    const long K = static_cast<long>(mx.size());
+    std::vector<float> ref(2 * static_cast<size_t>(K));
+    for (long k = 0; k < K; ++k) {
+        ref[2 * static_cast<size_t>(k)] = mx[static_cast<size_t>(k)];
+        ref[2 * static_cast<size_t>(k) + 1] = my[static_cast<size_t>(k)];
+    }
+    if (rendered_pixels) *rendered_pixels = 0;
+    if (scene.defects.empty()) return ref;
+    if (!own.tracked_defects)
+        throw std::invalid_argument("defect_free_reference: the render must track its defects (RenderOptions::track_defects)");
+    std::vector<long> met;
+    for (const DefectPaths& e : own.defect_paths)
+        if (met.empty() || met.back() != e.pixel) met.push_back(e.pixel);
+    if (rendered_pixels) *rendered_pixels = static_cast<long>(met.size());
+    if (met.empty()) return ref;
+    const Scene free = defect_free(scene);
+    const Solid free_solid = build_solid(free, nullptr, representation != Representation::MeshOnly);
+    TracerOptions o;
+    o.representation = representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
+    RenderOptions ro = options;
+    ro.pattern = nullptr;
+    ro.progress = false;
+    ro.track_defects = false;
+    ro.pixels = &met;
+    const RenderResult free_render = render(Tracer(free, free_solid, o), ro);
+    FeatureOptions means_only;
+    means_only.dark_block = 0;
+    const FeatureImages m = compute_features(free_render.T, scene.camera.resolution[0], scene.camera.resolution[1],
+                                             display_grid(scene), means_only, nullptr);
+    const auto& fx = m.channel("MeanX");
+    const auto& fy = m.channel("MeanY");
+    for (long k : met) {
+        ref[2 * static_cast<size_t>(k)] = fx[static_cast<size_t>(k)];
+        ref[2 * static_cast<size_t>(k) + 1] = fy[static_cast<size_t>(k)];
+    }
+    return ref;
+}
+
+SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions& options, StageReport* report) {
+    SceneRun out;
+    out.representation = options.representation;
+    StageTimer t_setup(report, "trace-setup");
+    TracerOptions topt;
+    topt.representation = options.representation;
+    topt.robust = options.robust;
+    const Tracer tracer(scene, solid, topt);
+    t_setup.done(to_string(topt.representation));
+
+    RenderOptions ro;
+    ro.threads = options.threads;
+    ro.progress = options.progress;
+    ro.track_defects = true;
+    StageTimer t_render(report, "render");
+    out.render = render(tracer, ro);
+    const RenderResult& r = out.render;
+    t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", r.stats.paths, r.stats.segments,
+                              r.stats.paths / std::max(r.seconds, 1e-9) / 1e6));
+
+    StageTimer t_features(report, "features");
+    out.features = compute_features(r.T, scene.camera.resolution[0], scene.camera.resolution[1], display_grid(scene),
+                                    resolved_feature_options(scene, options.features), nullptr);
+    t_features.done(fmt::format("{} channels", out.features.channels.size()));
+
+    StageTimer t_ref(report, "reference");
+    out.reference = defect_free_reference(scene, r, out.features.channel("MeanX"), out.features.channel("MeanY"),
+                                          options.representation, ro, &out.reference_pixels);
+    add_deflection(out.features, out.reference);  // exactly 0 for a defect-free scene (its own reference)
+    t_ref.done(scene.defects.empty() ? std::string("the scene itself (defect-free)")
+                                     : fmt::format("defect-free object at the {} pixels whose paths met a defect",
+                                                   out.reference_pixels));
+    return out;
+}
+
+}  // namespace ltm
