@@ -1,5 +1,6 @@
 #include "trace/Intersect.h"
 
+#include "trace/Polynomial.h"
 #include "trace/TraceTolerance.h"
 
 #include <algorithm>
@@ -76,31 +77,34 @@ Roots cone(const Surface& s, const Vec3& o, const Vec3& d) {
     return solve_quadratic(a, b, c, b * b - 4.0 * a * c);
 }
 
+// Torus with centre C, unit axis a, radii R (major) and r (minor):
+//   f(x) = (|x|^2 + R^2 - r^2)^2 - 4 R^2 (|x|^2 - (x.a)^2) = 0,  x relative to C.
+// Along the ray, x = p + s d with p the ray's point nearest C (s = t - tm, so p.d = 0 and |p| is
+// at most R + r wherever the ray meets the torus: the quartic's coefficients stay of the size of
+// the torus and do not cancel). With dd = d.d, pa = p.a, da = d.a, A = |p|^2 + R^2 - r^2:
+//   f = dd^2 s^4 + (2 dd A - 4 R^2 (dd - da^2)) s^2 + 8 R^2 pa da s + A^2 - 4 R^2 (|p|^2 - pa^2)
+// (the odd terms of |x|^2 vanish with p.d = 0). Its real roots in the bounding sphere's span are
+// isolated with a guarantee (trace/Polynomial.h: critical-point recursion, safeguarded Newton),
+// so a chord of any length through the tube is found; a tangent ray (a double root) is no hit.
+// Near the tube f = (dist^2 - r^2)(... ~ 4 R^2) ~ 8 R^2 r s_n for a normal offset s_n, and f is
+// evaluated to a few ulps of A^2, so the roots are accurate to ~eps A^2 / (8 R^2 r).
 Roots torus(const Surface& s, const Vec3& o, const Vec3& d) {
     Roots r;
-    // Only the part of the ray within the torus's bounding sphere (radius R + r) can hit it.
     const Roots bs = sphere(s.origin, s.radius + s.minor_radius, o, d);
     if (bs.count < 2) return r;
-    const double t0 = bs.t[0], t1 = bs.t[1];
-    const double step = 0.25 * s.minor_radius;
-    const int n = std::max(4, static_cast<int>(std::ceil((t1 - t0) / step)));
-    auto f = [&](double t) { return s.signed_distance(o + d * t); };
-    double ta = t0, fa = f(ta);
-    for (int i = 1; i <= n && r.count < 4; ++i) {
-        const double tb = t0 + (t1 - t0) * i / n, fb = f(tb);
-        if ((fa < 0) != (fb < 0)) {
-            double lo = ta, hi = tb, flo = fa;
-            for (int it = 0; it < 200; ++it) {
-                const double mid = 0.5 * (lo + hi);
-                if (mid <= lo || mid >= hi) break;
-                const double fm = f(mid);
-                if ((fm < 0) == (flo < 0)) { lo = mid; flo = fm; } else hi = mid;
-            }
-            r.push(0.5 * (lo + hi));
-        }
-        ta = tb;
-        fa = fb;
-    }
+    const double dd = dot(d, d);
+    const double tm = dot(s.origin - o, d) / dd;
+    const Vec3 p = o + d * tm - s.origin;
+    const double R2 = s.radius * s.radius, rr = s.minor_radius * s.minor_radius;
+    const double pp = dot(p, p), pa = dot(p, s.axis), da = dot(d, s.axis);
+    const double A = pp + (R2 - rr);
+    const double c[5] = {A * A - 4.0 * R2 * (pp - pa * pa), 8.0 * R2 * pa * da,
+                         2.0 * dd * A - 4.0 * R2 * (dd - da * da), 0.0, dd * dd};
+    // The span is widened a little: a root on the bounding sphere itself (the outer equator of an
+    // equatorial ray) must not sit on the interval's end, where its sign change would be lost.
+    const double margin = 1e-6 * (s.radius + s.minor_radius);
+    const PolyRoots roots = real_roots(c, 4, bs.t[0] - tm - margin, bs.t[1] - tm + margin);
+    for (int i = 0; i < roots.count; ++i) r.push(roots.x[static_cast<size_t>(i)] + tm);
     return r;
 }
 

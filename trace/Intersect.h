@@ -23,8 +23,8 @@ struct Roots {
 Roots solve_quadratic(double a, double b, double c, double disc);
 
 // Every intersection of the ray o + t d (d unit) with the full surface (both cone nappes, the
-// whole infinite cylinder / plane). The torus's quartic roots are found by bracketing sign
-// changes of the exact distance on a grid of steps below the minor radius, then bisection.
+// whole infinite cylinder / plane). The torus's quartic roots are isolated with a guarantee
+// (trace/Polynomial.h) and polished to the rounding of the quartic; a tangent ray is no hit.
 Roots intersect(const Surface& s, const Vec3& o, const Vec3& d);
 
 // A bound on how far the computed point p can be from the true surface point it represents:
