@@ -552,4 +552,56 @@ Image montage(const std::vector<std::vector<Image>>& cells, const std::vector<st
     return img;
 }
 
+Image histogram(const std::vector<double>& values, int bins, const std::string& title, const std::string& x_label,
+                bool log_x) {
+    if (bins < 1) throw std::invalid_argument("histogram: bins must be >= 1");
+    std::vector<double> v;
+    for (double x : values)
+        if (std::isfinite(x) && (!log_x || x > 0)) v.push_back(log_x ? std::log10(x) : x);
+    double lo = v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+    double hi = v.empty() ? 1.0 : *std::max_element(v.begin(), v.end());
+    if (!(hi > lo)) {
+        lo -= 0.5;
+        hi += 0.5;
+        bins = 1;
+    }
+    std::vector<long> count(static_cast<size_t>(bins), 0);
+    for (double x : v) ++count[static_cast<size_t>(std::min(bins - 1, static_cast<int>((x - lo) / (hi - lo) * bins)))];
+    const long peak = std::max(1L, *std::max_element(count.begin(), count.end()));
+
+    const int W = 640, H = 400, ts = kPlotTextScale;
+    Image img;
+    img.width = W;
+    img.height = H;
+    img.channels = 3;
+    img.data.assign(static_cast<size_t>(W) * H * 3, 1.0f);
+    auto fill = [&](int x0, int y0, int x1, int y1, Rgb c) {
+        for (int y = std::max(0, y0); y < std::min(H, y1); ++y)
+            for (int x = std::max(0, x0); x < std::min(W, x1); ++x)
+                for (int k = 0; k < 3; ++k) img.data[(static_cast<size_t>(y) * W + x) * 3 + k] = c[static_cast<size_t>(k)];
+    };
+    const int left = 80, right = W - 24, top = 16 + text_height(title, ts) + 12, bottom = H - 24 - 2 * text_height("0", ts);
+    draw_text(img, (W - text_width(title, ts)) / 2, 12, title, ts, kBlack);
+    const Rgb bar = viridis(0.5);
+    const double bw = static_cast<double>(right - left) / bins;
+    for (int b = 0; b < bins; ++b) {
+        const int h = static_cast<int>(std::lround(static_cast<double>(count[static_cast<size_t>(b)]) / peak * (bottom - top)));
+        fill(left + static_cast<int>(b * bw) + 1, bottom - h, left + static_cast<int>((b + 1) * bw), bottom, bar);
+    }
+    fill(left, top, left + 1, bottom + 1, kFrameColour);       // y axis
+    fill(left, bottom, right + 1, bottom + 1, kFrameColour);   // x axis
+    const std::string ymax = std::to_string(peak);
+    draw_text(img, left - 8 - text_width(ymax, ts), top, ymax, ts, kBlack);
+    draw_text(img, left - 8 - text_width("0", ts), bottom - text_height("0", ts), "0", ts, kBlack);
+    for (double f : {0.0, 0.5, 1.0}) {
+        const double x = lo + f * (hi - lo);
+        const std::string t = format_tick(log_x ? std::pow(10.0, x) : x);
+        const int px = left + static_cast<int>(f * (right - left));
+        fill(px, bottom, px + 1, bottom + 5, kFrameColour);
+        draw_text(img, std::clamp(px - text_width(t, ts) / 2, 0, W - text_width(t, ts)), bottom + 8, t, ts, kBlack);
+    }
+    draw_text(img, (W - text_width(x_label, ts)) / 2, H - 8 - text_height(x_label, ts), x_label, ts, kBlack);
+    return img;
+}
+
 }  // namespace ltm

@@ -156,4 +156,14 @@ constexpr int kMontageColumnGap = 4;    // between column labels and cells
 Image montage(const std::vector<std::vector<Image>>& cells, const std::vector<std::string>& row_labels,
               const std::vector<std::string>& column_labels, const std::string& title);
 
+// ---- histogram ----
+
+// A histogram of `values` (non-finite ones ignored): `bins` equal bins over [min, max] of the
+// values (log-spaced with log_x, values <= 0 then ignored), bars in viridis' middle colour on a
+// framed plot, the bin edges of the first, middle and last bins as x tick labels, the largest
+// count on the y axis, the title above and the x label below. 640 x 400 pixels. An empty or
+// constant set draws one bar. bins < 1 is std::invalid_argument.
+Image histogram(const std::vector<double>& values, int bins, const std::string& title, const std::string& x_label,
+                bool log_x);
+
 }  // namespace ltm
