@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/BenchSupport.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
 #include "trace/Render.h"
@@ -31,12 +32,8 @@ using namespace ltm;
 
 namespace {
 
-double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
+using bench::median;
+using bench::now;
 
 struct Setup {
     Scene scene;

@@ -19,12 +19,16 @@
 #include <string>
 #include <vector>
 
+#include "bench/BenchSupport.h"
 #include "scene/SceneLoader.h"
 #include "trace/Render.h"
 #include "validation/AnalyticScene.h"
 #include "validation/ValidationRays.h"
 
 using namespace ltm;
+using bench::median;
+using bench::now;
+using bench::record_segments;
 
 namespace {
 
@@ -45,13 +49,6 @@ seed: 1
     return buf;
 }
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
-
-double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
 struct Setup {
     Scene scene;
     Solid solid;
@@ -61,26 +58,6 @@ Setup setup(const std::string& yaml) {
     s.scene = parse_scene(yaml, "bench");
     s.solid = build_solid(Lens(s.scene.object.lens), s.scene.defects, s.scene.mesh);
     return s;
-}
-
-// Records the segments (origin, direction) of the paths of the first `pixels` pixels.
-std::vector<std::pair<Vec3, Vec3>> record_segments(const Tracer& t, long pixels) {
-    std::vector<std::pair<Vec3, Vec3>> segs;
-    const auto& cam = t.camera();
-    for (long k = 0; k < pixels; ++k) {
-        const auto perm = cam.permutation(k, t.scene().seed);
-        for (int s = 0; s < cam.samples_per_pixel(); ++s) {
-            Rng rng(t.scene().seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
-            Vec3 o, d;
-            cam.sample(k, s, perm, rng, o, d);
-            const PrincipalPath p = t.principal_path(o, d);
-            Vec3 from = o, dir = d;
-            segs.push_back({from, dir});
-            for (size_t i = 0; i + 1 < p.vertices.size(); ++i) segs.push_back({p.vertices[i], normalize(p.vertices[i + 1] - p.vertices[i])});
-            if (!p.vertices.empty()) segs.push_back({p.vertices.back(), p.direction});
-        }
-    }
-    return segs;
 }
 
 }  // namespace
@@ -134,22 +111,7 @@ int main(int argc, char** argv) {
         TracerOptions ro;
         const Tracer refined(paper.scene, paper.solid, ro);
         const auto segs = record_segments(refined, 400);
-        std::vector<double> times;
-        for (int i = 0; i < reps; ++i) {
-            const double t0 = now();
-            const size_t n = segs.size();
-            std::vector<long> sink(static_cast<size_t>(threads) * 16, 0);
-            tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, segments, 4096), [&](const auto& range) {
-                long hits = 0;
-                for (std::uint64_t j = range.begin(); j != range.end(); ++j) {
-                    const auto& sg = segs[j % n];
-                    hits += mesh.embree().raw_intersect(sg.first, sg.second, 0.0f) >= 0;
-                }
-                sink[0] += hits;  // keeps the calls alive; races on the count are harmless here
-            });
-            times.push_back(now() - t0);
-        }
-        const double raw_rate = segments / median(times);
+        const double raw_rate = segments / bench::bare_embree_seconds(mesh, segs, segments, threads, reps);
         std::printf("\nb. %llu bare rtcIntersect1 calls (recorded path segments, replayed) on the same %zu triangles: "
                     "%.3f Mrays/s\n   efficiency refined / bare = %.2f, analytic / bare = %.2f\n\n",
                     static_cast<unsigned long long>(segments), paper.solid.mesh.num_triangles(), raw_rate / 1e6,

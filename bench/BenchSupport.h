@@ -1,0 +1,70 @@
+#pragma once
+// What the benchmark programs share: medians, a clock, and the bare-Embree baseline every speed
+// is reported against (the same segments cast as plain rtcIntersect1 calls on the same triangles).
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "trace/Tracer.h"
+
+namespace ltm::bench {
+
+inline double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+inline double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+// The segments (origin, direction) of the principal paths of the first `pixels` pixels' samples.
+inline std::vector<std::pair<Vec3, Vec3>> record_segments(const Tracer& t, long pixels) {
+    std::vector<std::pair<Vec3, Vec3>> segs;
+    const auto& cam = t.camera();
+    for (long k = 0; k < pixels; ++k) {
+        const auto perm = cam.permutation(k, t.scene().seed);
+        for (int s = 0; s < cam.samples_per_pixel(); ++s) {
+            Rng rng(t.scene().seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
+            Vec3 o, d;
+            cam.sample(k, s, perm, rng, o, d);
+            const PrincipalPath p = t.principal_path(o, d);
+            segs.push_back({o, d});
+            for (size_t i = 0; i + 1 < p.vertices.size(); ++i)
+                segs.push_back({p.vertices[i], normalize(p.vertices[i + 1] - p.vertices[i])});
+            if (!p.vertices.empty()) segs.push_back({p.vertices.back(), p.direction});
+        }
+    }
+    return segs;
+}
+
+// Seconds for `count` bare rtcIntersect1 calls (the recorded segments, replayed cyclically) on
+// `mesh_only`'s Embree scene, on `threads` threads; median of `reps`.
+inline double bare_embree_seconds(const Tracer& mesh_only, const std::vector<std::pair<Vec3, Vec3>>& segs,
+                                  std::uint64_t count, int threads, int reps) {
+    std::vector<double> times;
+    tbb::task_arena arena(threads);
+    for (int i = 0; i < reps; ++i) {
+        const double t0 = now();
+        std::atomic<long> sink{0};
+        arena.execute([&] {
+            tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, count, 4096), [&](const auto& range) {
+                long hits = 0;
+                for (std::uint64_t j = range.begin(); j != range.end(); ++j) {
+                    const auto& sg = segs[j % segs.size()];
+                    hits += mesh_only.embree().raw_intersect(sg.first, sg.second, 0.0f) >= 0;
+                }
+                sink += hits;  // keeps the calls alive
+            });
+        });
+        times.push_back(now() - t0);
+    }
+    return median(times);
+}
+
+}  // namespace ltm::bench
