@@ -366,3 +366,23 @@ TEST_F(Dataset, RenderingASamplesSceneReproducesItBitForBit) {
         EXPECT_EQ(slurp(dir / "again" / i / "features.npz"), slurp(s / "features.npz")) << i;
     }
 }
+
+TEST_F(Dataset, TheSlurmArrayScriptShardsTheDatasetAsOneRun) {
+    // scripts/dataset-slurm.sh run as Slurm runs an array of 3 tasks numbered from 5: the
+    // variables Slurm sets, the executable in LTMSIM.
+    const auto full = whole("full");
+    const std::string script = (fs::path(LTM_SOURCE_DIR) / "scripts" / "dataset-slurm.sh").string();
+    for (int task : {6, 5, 7}) {
+        const auto r = ltm::test::run_shell(
+            "SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " SLURM_ARRAY_TASK_MIN=5 SLURM_ARRAY_TASK_COUNT=3 "
+                "SLURM_CPUS_PER_TASK=1 LTMSIM=" LTMSIM_EXE " bash " + q(script) + " " + q(dir / "spec.yaml") + " " +
+                q(dir / "slurm"),
+            dir);
+        ASSERT_EQ(r.status, 0) << task << r.out << r.err;
+    }
+    EXPECT_EQ(differences(full, tree(dir / "slurm")), std::vector<std::string>{});
+    // Outside an array it says so.
+    const auto no = ltm::test::run_shell("bash " + q(script) + " " + q(dir / "spec.yaml") + " " + q(dir / "x"), dir);
+    EXPECT_NE(no.status, 0);
+    EXPECT_NE(no.err.find("not a Slurm array task"), std::string::npos) << no.err;
+}
