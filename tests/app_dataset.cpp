@@ -386,3 +386,16 @@ TEST_F(Dataset, TheSlurmArrayScriptShardsTheDatasetAsOneRun) {
     EXPECT_NE(no.status, 0);
     EXPECT_NE(no.err.find("not a Slurm array task"), std::string::npos) << no.err;
 }
+
+TEST_F(Dataset, OptionalOutputsKeepTheMatrixAndWritePreviews) {
+    spit(dir / "spec.yaml", spec("outputs: {ltm: true, previews: true}\n", 2));
+    whole("full");
+    for (const char* i : {"000000", "000001"}) {
+        const fs::path s = dir / "full" / "samples" / i;
+        EXPECT_TRUE(intact(s)) << i;  // the checksums cover the optional files too
+        EXPECT_GT(fs::file_size(s / "ltm.npz"), 0u);
+        EXPECT_TRUE(fs::exists(s / "previews" / "ScatterCount.png"));
+        EXPECT_TRUE(fs::exists(s / "previews" / "mask.png"));
+        EXPECT_NE(slurp(s / "SHA256SUMS").find("  previews/mask.png\n"), std::string::npos);
+    }
+}

@@ -8,6 +8,7 @@
 // render takes a few milliseconds, so the test runs the real executable many times.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -207,6 +208,54 @@ TEST_F(RenderCommand, WritesTheMatrixAndTheRunRecord) {
                                  dir);
     EXPECT_EQ(py.status, 0) << py.err;
     EXPECT_EQ(py.out, "OK\n") << py.err;
+}
+
+TEST_F(RenderCommand, NumpyReadsTheFeaturesAndThePatternImageWithTheExrsValues) {
+    // features.npz and image.npz hold exactly the EXR files' channels (float32, rows x columns,
+    // row 0 on top): numpy prints every value, compared bit for bit with read_exr_channels.
+    const fs::path out = dir / "out", pat = dir / "pat";
+    ASSERT_EQ(ltmsim(render(scene, out, "--threads 2"), dir).status, 0);
+    const fs::path png = dir / "ramp.png";
+    std::vector<std::uint8_t> codes;
+    for (int p = 0; p < kP; ++p)
+        for (int q = 0; q < kQ; ++q) codes.push_back(static_cast<std::uint8_t>((7 * p + 3 * q) % 256));
+    write_gray_png(png, kQ, kP, codes);
+    ASSERT_EQ(ltmsim(render(scene, pat, "--threads 2 --pattern '" + png.string() + "'"), dir).status, 0);
+    if (!python_has_scipy(dir)) GTEST_SKIP() << kPython << " cannot import numpy";
+    const fs::path script = write("dump.py", R"PY(
+import sys
+import numpy as np
+z = np.load(sys.argv[1])
+for name in sorted(z.files):
+    a = z[name]
+    assert a.dtype == np.float32 and a.ndim == 2, (name, a.dtype, a.shape)
+    print(name, a.shape[0], a.shape[1], " ".join(v.hex() for v in a.astype(np.float64).ravel()))
+)PY");
+    for (const auto& [folder, file] : {std::pair{out, std::string("features")}, std::pair{pat, std::string("image")}}) {
+        const Outcome py = run_shell(std::string(kPython) + " '" + script.string() + "' '" + (folder / (file + ".npz")).string() + "'", dir);
+        ASSERT_EQ(py.status, 0) << py.err;
+        int w = 0, h = 0;
+        auto exr = ltm::read_exr_channels((folder / (file + ".exr")).string(), &w, &h);
+        std::sort(exr.begin(), exr.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        const auto lines = py.lines();
+        ASSERT_EQ(lines.size(), exr.size()) << file;
+        for (size_t c = 0; c < exr.size(); ++c) {
+            std::istringstream in(lines[c]);
+            std::string name;
+            int rows = 0, cols = 0;
+            in >> name >> rows >> cols;
+            EXPECT_EQ(name, exr[c].first);
+            EXPECT_EQ(rows, h);
+            EXPECT_EQ(cols, w);
+            for (size_t k = 0; k < exr[c].second.size(); ++k) {
+                std::string hex;
+                in >> hex;
+                const double v = std::strtod(hex.c_str(), nullptr);
+                const float e = exr[c].second[k];
+                EXPECT_TRUE((std::isnan(v) && std::isnan(e)) || v == static_cast<double>(e)) << name << " pixel " << k;
+            }
+        }
+    }
 }
 
 TEST_F(RenderCommand, TheMatrixDoesNotDependOnThreads) {
