@@ -399,3 +399,20 @@ TEST_F(Dataset, OptionalOutputsKeepTheMatrixAndWritePreviews) {
         EXPECT_NE(slurp(s / "SHA256SUMS").find("  previews/mask.png\n"), std::string::npos);
     }
 }
+
+TEST_F(Dataset, SmoothInhomogeneitiesAreMeshedTracedAndLabelled) {
+    // A graded-index defect (TetGen per sample, coarse index tolerance to keep it quick): its
+    // pixels are those whose paths pass where its index differs, about its disc of radius 1 to
+    // 1.5 mm in 1.25 mm pixels.
+    spit(dir / "base.yaml", std::string(kBase) + "mesh: {index_tolerance: 0.002}\n");
+    spit(dir / "spec.yaml", "scene: base.yaml\nsamples: 2\ndefects:\n  - {type: inhomogeneity, count: 1, radius: "
+                            "{uniform: [1.0, 1.5]}, delta_n: 0.01}\n");
+    const auto r = run("dataset " + q(dir / "spec.yaml") + " -o " + q(dir / "g"));
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("tetgen"), std::string::npos) << r.out;  // the stage ran
+    for (const char* i : {"000000", "000001"}) {
+        const std::string labels = slurp(dir / "g" / "samples" / i / "labels.json");
+        EXPECT_NE(labels.find("\"kind\": \"inhomogeneity\""), std::string::npos);
+        EXPECT_EQ(labels.find("\"pixel_area\": 0,"), std::string::npos) << labels;
+    }
+}
