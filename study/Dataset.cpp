@@ -48,10 +48,6 @@ std::string read_text(const fs::path& p) {
     return s.str();
 }
 
-bool is_sample_name(const std::string& n) {
-    return n.size() >= 6 && std::all_of(n.begin(), n.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
 // The files of a sample folder and their checksums, in `sha256sum` form, names sorted.
 std::string checksum_file(const fs::path& folder) {
     std::vector<std::string> names;

@@ -116,6 +116,13 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
             cutters_.push_back(std::move(c));
         }
 
+    for (size_t k = 0; k < scene.defects.size(); ++k) {
+        const Defect& d = scene.defects[k];
+        if (d.type == DefectType::Inhomogeneity && d.index_profile == IndexProfile::Smooth &&
+            lens_.signed_distance(d.center) < d.max_semi_axis())  // it may reach a face
+            face_inclusions_.push_back(static_cast<int>(k));
+    }
+
     // Enclosed ellipsoid defects (bubbles and particles that cut nothing) as exact primitives.
     std::vector<Patch> ellipsoids;
     std::vector<bool> is_ellipsoid_tag(solid.surfaces.size(), false);
@@ -592,14 +599,21 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
         const Vec3& d_in = h.d_in;
         const bool entering = dot(d_in, h.n_out) < 0;  // crossing from `outside` into `inside`
         const Medium from = entering ? s.outside : s.inside;
-        const Medium to = entering ? s.inside : s.outside;
+        Medium to = entering ? s.inside : s.outside;
+        // A smooth inhomogeneity clipped by a face: a ray entering the glass through the face
+        // where the inhomogeneity reaches it enters the inhomogeneity's medium (the index there
+        // is its field's, continuous with the glass's at rho = 1).
+        if (to == Medium::Glass && s.defect < 0)
+            for (int k : face_inclusions_)
+                if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(h.p, h.p) < 1.0) to = Medium::inclusion(k);
         const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
         Vec3 nd;
         if (!s.optical) {
             // A smooth inhomogeneity's boundary: the index is continuous, so the ray keeps its
-            // direction and only changes how it propagates.
+            // direction and only changes how it propagates. The part of the boundary outside the
+            // glass (a face clips the inhomogeneity) is met by rays in the air: nothing changes.
             nd = d_in;
-            st.medium = to;
+            if (st.medium == from) st.medium = to;
         } else {
             if (rec) {
                 rec->vertices.push_back(h.p);

@@ -153,6 +153,7 @@ private:
     TelecentricCamera camera_;
     std::vector<Patch> object_patches_;   // the exact guard (Refined)
     std::vector<Patch> ellipsoids_;       // enclosed ellipsoid defects (bubbles, particles, inclusions)
+    std::vector<int> face_inclusions_;    // smooth inhomogeneities that a face of the object clips
     std::vector<Patch> user_patches_;     // user geometry (Analytic, Refined): the ellipsoids
     std::unique_ptr<MediaTable> media_;
     // The surfaces a closed-form graded-index path can meet, as quadrics for its root finder.
