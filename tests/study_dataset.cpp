@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fmt/format.h>
 #include <map>
 #include <random>
@@ -301,4 +302,15 @@ TEST(CocoRle, CountsAndStringsFollowMaskApi) {
         for (auto x : c) total += x;
         EXPECT_EQ(total, 37 * 23);
     }
+}
+
+TEST(DatasetSpec, EveryShippedSpecLoadsAndCanBeMet) {
+    int specs = 0;
+    for (const auto& e : std::filesystem::directory_iterator(std::string(LTM_SOURCE_DIR) + "/scenes/datasets")) {
+        if (e.path().extension() != ".yaml") continue;
+        ++specs;
+        const DatasetSpec s = load_dataset_spec(e.path().string());
+        for (long i = 0; i < std::min(s.samples, 200L); ++i) EXPECT_NO_THROW(draw_sample(s, i)) << e.path() << " " << i;
+    }
+    EXPECT_GE(specs, 2);
 }
