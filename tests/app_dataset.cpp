@@ -130,7 +130,11 @@ TEST_F(Dataset, KilledAtRandomMomentsThenResumedGivesTheSameBytes) {
 camera: {resolution: [40, 40], size: [25.0, 25.0], numerical_aperture: 0.01, samples_per_pixel: 64}
 display: {resolution: [100, 100], size: [100.0, 100.0], z: 60.0}
 )");
+    const auto t0 = std::chrono::steady_clock::now();
     const auto full = whole("full");
+    // Kill times drawn within the uninterrupted run's own duration, so that they land mid-run on
+    // a fast machine as on a slow one.
+    const double span_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     const fs::path out = dir / "killed";
     std::mt19937 g(2024);
     int kills = 0;
@@ -145,7 +149,8 @@ display: {resolution: [100, 100], size: [100.0, 100.0], z: 60.0}
             ::execl(LTMSIM_EXE, LTMSIM_EXE, "dataset", s.c_str(), "-o", o.c_str(), "--resume", "--threads", "2", nullptr);
             ::_exit(127);
         }
-        std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(20, 600)(g)));
+        const double at = std::uniform_real_distribution<double>(0.05, 0.7)(g) * span_ms;
+        std::this_thread::sleep_for(std::chrono::microseconds(static_cast<long>(1e3 * at)));
         ::kill(pid, SIGKILL);
         int status = 0;
         ::waitpid(pid, &status, 0);
