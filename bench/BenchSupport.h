@@ -9,12 +9,33 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "trace/Tracer.h"
 
 namespace ltm::bench {
+
+// The options every benchmark program takes: --threads N --reps R --out DIR --quick --samples S.
+struct Args {
+    int threads = 2, reps = 3;
+    std::string out = ".";
+    bool quick = false;
+    long samples = 16;
+};
+inline Args parse_args(int argc, char** argv, Args a = {}) {
+    for (int i = 1; i < argc; ++i) {
+        if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) a.threads = std::atoi(argv[++i]);
+        else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) a.reps = std::atoi(argv[++i]);
+        else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) a.out = argv[++i];
+        else if (!std::strcmp(argv[i], "--samples") && i + 1 < argc) a.samples = std::atol(argv[++i]);
+        else if (!std::strcmp(argv[i], "--quick")) a.quick = true;
+    }
+    return a;
+}
 
 inline double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());

@@ -48,15 +48,12 @@ std::string replaced(std::string s, const std::string& from, const std::string& 
 }  // namespace
 
 int main(int argc, char** argv) {
-    int threads = 2, reps = 3;
-    long samples = 16;
-    std::string out = "out/bench";
-    for (int i = 1; i + 1 < argc; i += 2) {
-        if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
-        else if (!std::strcmp(argv[i], "--reps")) reps = std::atoi(argv[i + 1]);
-        else if (!std::strcmp(argv[i], "--samples")) samples = std::atol(argv[i + 1]);
-        else if (!std::strcmp(argv[i], "--out")) out = argv[i + 1];
-    }
+    bench::Args defaults;
+    defaults.out = "out/bench";
+    const bench::Args args = bench::parse_args(argc, argv, defaults);
+    const int threads = args.threads, reps = args.reps;
+    const long samples = args.samples;
+    const std::string out = args.out;
     const fs::path specs = fs::path(LTM_SOURCE_DIR) / "scenes" / "datasets";
     const std::string mixed = read(specs / "paper-mixed.yaml");
     const std::vector<std::pair<std::string, std::string>> cases = {

@@ -93,15 +93,10 @@ mesh: {{index_tolerance: {}}}
 }  // namespace
 
 int main(int argc, char** argv) {
-    int threads = 2, reps = 3;
-    std::string out = ".";
-    bool quick = false;
-    for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
-        else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
-        else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-        else if (!std::strcmp(argv[i], "--quick")) quick = true;
-    }
+    const bench::Args args = bench::parse_args(argc, argv);
+    const int threads = args.threads, reps = args.reps;
+    const std::string out = args.out;
+    const bool quick = args.quick;
     std::printf("threads %d, repetitions %d (medians)\n\n", threads, reps);
 
     // a. Per thread: one thread, so the ratio is the cost per path.

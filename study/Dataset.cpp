@@ -243,7 +243,7 @@ DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& o) {
     std::vector<long> mine;
     for (long i = o.shard - 1; i < spec.samples; i += o.shards) mine.push_back(i);
     sum.shard_samples = static_cast<long>(mine.size());
-    std::vector<long> todo;
+    std::vector<long> pending;
     if (fs::is_directory(samples)) {
         std::map<std::string, std::vector<fs::path>> temporaries;  // sample name -> its stale temporaries
         for (const auto& e : fs::directory_iterator(samples)) {
@@ -266,10 +266,10 @@ DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& o) {
                 fs::remove_all(f, ec);
                 ++sum.redone;
             }
-            todo.push_back(i);
+            pending.push_back(i);
         }
     } else {
-        todo = mine;
+        pending = mine;
     }
     if (new_identity) write_identity(spec, o);
     fs::create_directories(samples);
@@ -286,11 +286,11 @@ DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& o) {
             static_cast<size_t>(jobs),
             tbb::make_filter<void, long>(tbb::filter_mode::serial_in_order,
                                          [&](tbb::flow_control& fc) -> long {
-                                             if (next >= todo.size() || stop) {
+                                             if (next >= pending.size() || stop) {
                                                  fc.stop();
                                                  return -1;
                                              }
-                                             return todo[next++];
+                                             return pending[next++];
                                          }) &
                 tbb::make_filter<long, SampleOutcome>(tbb::filter_mode::parallel,
                                                       [&](long i) { return produce_sample(spec, i, samples); }) &
