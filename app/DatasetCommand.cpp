@@ -88,8 +88,9 @@ int run(const DatasetArgs& a) {
         parse_shard(a.shard, o.shard, o.shards);
         spec = load_dataset_spec(a.input);
         o.spec_text = yaml::read_file(a.input, "dataset spec");
-        // Every sample is drawn now: a spec that cannot be met fails before anything is rendered.
-        check_spec_feasible(spec);
+        // The shard's samples are drawn now: a spec that cannot be met fails before anything is
+        // rendered.
+        check_spec_feasible(spec, o.shard, o.shards);
     } catch (const InputError& e) {
         std::cerr << e.what() << "\n";
         return 2;

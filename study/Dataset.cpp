@@ -227,8 +227,9 @@ void parse_shard(const std::string& text, int& shard, int& shards) {
     shards = static_cast<int>(n);
 }
 
-void check_spec_feasible(const DatasetSpec& spec) {
-    for (long i = 0; i < spec.samples; ++i) (void)draw_sample(spec, i);
+void check_spec_feasible(const DatasetSpec& spec, int shard, int shards) {
+    for (long i = 0; i < spec.samples; ++i)
+        if (i < kFeasibilitySamples || i % shards == shard - 1) (void)draw_sample(spec, i);
 }
 
 DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& o) {

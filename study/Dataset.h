@@ -66,9 +66,11 @@ struct DatasetSummary {
 // Parses "K/N" (1 <= K <= N); DatasetError naming the flag otherwise.
 void parse_shard(const std::string& text, int& shard, int& shards);
 
-// Draws every sample of the spec (cheap) so that a spec that cannot be met fails before any
-// rendering; returns nothing, throws InputError at the spec entry.
-void check_spec_feasible(const DatasetSpec& spec);
+// Draws the shard's samples and the dataset's first kFeasibilitySamples (about a millisecond each,
+// against a fraction of a second to render one) so that a spec that cannot be met fails before
+// any rendering, the same way in every shard; throws InputError at the spec entry.
+inline constexpr long kFeasibilitySamples = 1000;
+void check_spec_feasible(const DatasetSpec& spec, int shard = 1, int shards = 1);
 
 DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& options);
 
