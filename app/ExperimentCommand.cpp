@@ -10,7 +10,7 @@
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
 #include "app/SceneSetup.h"
-#include "features/Image.h"
+#include "io/Image.h"
 #include "io/AtomicFile.h"
 #include "scene/InputError.h"
 #include "study/Experiment.h"

@@ -8,12 +8,12 @@
 #include <stdexcept>
 
 #include "app/JsonLine.h"
-#include "features/Image.h"
+#include "io/Image.h"
 #include "features/Plot.h"
 #include "io/AtomicFile.h"
 #include "app/Commands.h"
 #include "scene/SceneJson.h"
-#include "trace/LtmFile.h"
+#include "io/LtmFile.h"
 
 namespace ltm::app {
 

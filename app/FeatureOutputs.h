@@ -8,7 +8,7 @@
 
 #include "features/Features.h"
 #include "scene/Scene.h"
-#include "trace/CsrMatrix.h"
+#include "io/CsrMatrix.h"
 #include "geometry/StageReport.h"
 #include "study/SceneRun.h"
 #include "trace/Render.h"

@@ -7,8 +7,8 @@
 
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
-#include "features/Image.h"
-#include "trace/LtmFile.h"
+#include "io/Image.h"
+#include "io/LtmFile.h"
 
 namespace ltm::app {
 

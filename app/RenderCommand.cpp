@@ -7,9 +7,9 @@
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
 #include "app/SceneSetup.h"
-#include "features/Image.h"
+#include "io/Image.h"
 #include "scene/SceneJson.h"
-#include "trace/LtmFile.h"
+#include "io/LtmFile.h"
 #include "study/SceneRun.h"
 #include "trace/Render.h"
 

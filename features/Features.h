@@ -5,7 +5,7 @@
 // Indices (docs: /work/shared/conventions.md, "Pixel indices"): row k = m * N + n is camera pixel
 // (m, n), column l = p * Q + q is display pixel (p, q); rows m and p count from the +y (top) edge
 // down, columns n and q from the -x edge. Feature images are camera-sized, row-major, row 0 on top
-// (the features/Image.h orientation), so they can go straight to write_exr.
+// (the io/Image.h orientation), so they can go straight to write_exr.
 //
 // The contributing set of a row: its stored entries with value > threshold (the paper's eq. 3
 // "c_i >= 0" read as "> threshold"; threshold 0 keeps the entries > 0, so explicit zeros and
@@ -60,7 +60,7 @@
 #include <utility>
 #include <vector>
 
-#include "trace/CsrMatrix.h"
+#include "io/CsrMatrix.h"
 
 namespace ltm {
 

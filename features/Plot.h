@@ -1,7 +1,7 @@
 #pragma once
 // Pictures for people: feature images in a perceptually uniform colour map with a labelled colour
 // bar, text from a built-in bitmap font (no font files, no external library), and montages of
-// such pictures in a labelled grid. Everything here produces an RGB Image (features/Image.h: 3
+// such pictures in a labelled grid. Everything here produces an RGB Image (io/Image.h: 3
 // channels, values in [0, 1], row 0 on top) that write_png writes as an 8-bit PNG.
 //
 // Colour map: viridis (S. van der Walt and N. Smith, 2015; the 256-entry table of matplotlib's
@@ -22,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-#include "features/Image.h"
+#include "io/Image.h"
 
 namespace ltm {
 

@@ -16,7 +16,7 @@
 #include <sstream>
 #include <thread>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "features/Plot.h"
 #include "io/AtomicFile.h"
 #include "io/AtomicFolder.h"
@@ -28,7 +28,7 @@
 #include "study/Labels.h"
 #include "study/Sampler.h"
 #include "study/SceneRun.h"
-#include "trace/LtmFile.h"
+#include "io/LtmFile.h"
 
 namespace ltm {
 

@@ -4,7 +4,7 @@
 #include <fmt/format.h>
 #include <map>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "features/Plot.h"
 #include "io/AtomicFile.h"
 

@@ -25,7 +25,7 @@
 
 #include "defects/SolidBuilder.h"
 #include "features/Contrast.h"
-#include "features/Image.h"
+#include "io/Image.h"
 #include "scene/Scene.h"
 #include "study/SceneRun.h"
 

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <fmt/format.h>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "features/Plot.h"
 #include "study/Coco.h"
 

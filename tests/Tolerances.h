@@ -34,7 +34,7 @@ inline double face_on_surface(double chord_error, double scale) { return chord_e
 // coordinates of magnitude at most L.
 inline double float_export(double scale) { return std::ldexp(scale, -24); }
 
-// Rec. 709 luminance of a float RGB pixel (features/Image.h, pattern_values): the code evaluates
+// Rec. 709 luminance of a float RGB pixel (io/Image.h, pattern_values): the code evaluates
 // Y = 0.2126 R + 0.7152 G + 0.0722 B in double and rounds to float. With S = 0.2126|R| +
 // 0.7152|G| + 0.0722|B|, the double evaluation (3 rounded weights, 3 products, 2 sums) is within
 // 8 * 2^-53 S of the exact value and the final rounding to float adds at most 2^-24 |Y| <= 2^-24 S;

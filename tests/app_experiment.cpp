@@ -10,7 +10,7 @@
 #include <map>
 #include <sstream>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "tests/TestSupport.h"
 
 namespace fs = std::filesystem;

@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
-#include "trace/LtmFile.h"
+#include "io/LtmFile.h"
 
 namespace fs = std::filesystem;
 
@@ -185,7 +185,7 @@ TEST_F(RenderCommand, WritesTheMatrixAndTheRunRecord) {
     ASSERT_EQ(r.status, 0) << r.err;
     expect_outputs(out, {"ltm.npz", "run.json"}, {"image.exr", "image.png"});
 
-    // Our own reader (trace/LtmFile.h) first: shape and row sums.
+    // Our own reader (io/LtmFile.h) first: shape and row sums.
     const ltm::CsrMatrix T = ltm::read_ltm_npz((out / "ltm.npz").string());
     EXPECT_EQ(T.rows, kM * kN);
     EXPECT_EQ(T.cols, kP * kQ);
@@ -260,7 +260,7 @@ for name in sorted(z.files):
 
 TEST_F(RenderCommand, TheMatrixDoesNotDependOnThreads) {
     // "results do not depend on N", and the writer is byte-for-byte deterministic
-    // (trace/LtmFile.h): the two files must be identical.
+    // (io/LtmFile.h): the two files must be identical.
     ASSERT_EQ(ltmsim(render(scene, dir / "one", "--threads 1"), dir).status, 0);
     ASSERT_EQ(ltmsim(render(scene, dir / "two", "--threads 2"), dir).status, 0);
     const std::string a = slurp(dir / "one" / "ltm.npz"), b = slurp(dir / "two" / "ltm.npz");

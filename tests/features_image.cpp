@@ -1,4 +1,4 @@
-// Image I/O (features/Image.h): PNG and OpenEXR round trips, bit depths and colour types,
+// Image I/O (io/Image.h): PNG and OpenEXR round trips, bit depths and colour types,
 // orientation checked in the files' own bytes, 16-bit masks, bad files, pattern luminance.
 #include <gtest/gtest.h>
 #include <png.h>
@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "features/Image.h"
+#include "io/Image.h"
 #include "features/Plot.h"
 #include "tests/Tolerances.h"
 

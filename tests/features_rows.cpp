@@ -18,7 +18,7 @@
 
 #include "features/Features.h"
 #include "tests/Tolerances.h"
-#include "trace/CsrMatrix.h"
+#include "io/CsrMatrix.h"
 
 using namespace ltm;
 

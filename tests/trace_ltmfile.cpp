@@ -1,4 +1,4 @@
-// ltm.npz (trace/LtmFile.h) and CsrMatrix (trace/CsrMatrix.h): round trips, scipy interoperability
+// ltm.npz (io/LtmFile.h) and CsrMatrix (io/CsrMatrix.h): round trips, scipy interoperability
 // in both directions, corrupt files, atomic writes.
 //
 // The scipy checks run /usr/bin/python3 (the `python3` on PATH may be another interpreter); they
@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "tests/TestSupport.h"
-#include "trace/CsrMatrix.h"
-#include "trace/LtmFile.h"
+#include "io/CsrMatrix.h"
+#include "io/LtmFile.h"
 
 namespace fs = std::filesystem;
 using ltm::CsrMatrix;

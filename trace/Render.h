@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "trace/CsrMatrix.h"
+#include "io/CsrMatrix.h"
 #include "trace/Tracer.h"
 
 namespace ltm {

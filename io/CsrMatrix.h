@@ -1,6 +1,6 @@
 #pragma once
 // The light transport matrix in compressed sparse row (CSR) form, the layout scipy.sparse.csr_matrix
-// uses and the one `ltm.npz` stores (trace/LtmFile.h).
+// uses and the one `ltm.npz` stores (io/LtmFile.h).
 //
 // Row k is camera pixel k = m * N + n, column l is display pixel l = p * Q + q
 // (docs: /work/shared/conventions.md, "Pixel indices"). The nonzeros of row r are

@@ -52,7 +52,7 @@
 #include <string>
 
 #include "io/Npz.h"
-#include "trace/CsrMatrix.h"
+#include "io/CsrMatrix.h"
 
 namespace ltm {
 

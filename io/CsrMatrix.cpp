@@ -1,4 +1,4 @@
-#include "trace/CsrMatrix.h"
+#include "io/CsrMatrix.h"
 
 #include <cmath>
 #include <sstream>

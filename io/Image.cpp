@@ -1,4 +1,4 @@
-#include "features/Image.h"
+#include "io/Image.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfCompression.h>

@@ -1,4 +1,4 @@
-#include "trace/LtmFile.h"
+#include "io/LtmFile.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
