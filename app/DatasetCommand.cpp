@@ -11,7 +11,7 @@
 
 #include "app/Commands.h"
 #include "app/SceneSetup.h"
-#include "scene/InputError.h"
+#include "io/InputError.h"
 #include "scene/StrictYaml.h"
 #include "study/Dataset.h"
 

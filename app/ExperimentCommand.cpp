@@ -12,7 +12,7 @@
 #include "app/SceneSetup.h"
 #include "io/Image.h"
 #include "io/AtomicFile.h"
-#include "scene/InputError.h"
+#include "io/InputError.h"
 #include "study/Experiment.h"
 #include "geometry/TetMesh.h"
 

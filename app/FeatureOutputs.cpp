@@ -3,14 +3,11 @@
 #include <algorithm>
 #include <filesystem>
 #include <fmt/format.h>
-#include <fstream>
-#include <sstream>
 #include <stdexcept>
 
-#include "app/JsonLine.h"
 #include "io/Image.h"
 #include "features/Plot.h"
-#include "io/AtomicFile.h"
+#include "io/Json.h"
 #include "app/Commands.h"
 #include "scene/SceneJson.h"
 #include "io/LtmFile.h"
@@ -21,49 +18,70 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const JsonValue& member(const JsonValue& v, const std::string& key, const std::string& file) {
-    if (v.type == JsonValue::Type::Object)
-        for (const auto& [k, x] : v.object)
-            if (k == key) return x;
-    throw std::runtime_error(fmt::format("{}: missing \"{}\"", file, key));
+io::Json stats_json(const PathStats& s) {
+    return {{"paths", s.paths},
+            {"segments", s.segments},
+            {"segments_per_path", io::json_number(s.paths ? double(s.segments) / double(s.paths) : 0.0)},
+            {"reflections", s.reflections},
+            {"transmissions", s.transmissions},
+            {"total_internal_reflections", s.tir},
+            {"absorbed_by_particles", s.absorbed_particle},
+            {"absorbed_by_rim", s.absorbed_rim},
+            {"on_display", s.on_display},
+            {"off_display", s.off_display},
+            {"toward_camera", s.toward_camera},
+            {"roulette_kills", s.roulette_kills},
+            {"truncated", s.truncated},
+            {"nan_events", s.nan_events},
+            {"spurious_candidates", s.spurious_candidates},
+            {"guard_hits", s.guard_hits},
+            {"leak_retries", s.leak_retries},
+            {"leaks_unresolved", s.leaks_unresolved},
+            {"grin_segments", s.grin_segments},
+            {"grin_evaluations", s.grin_evaluations},
+            {"tet_crossings", s.tet_crossings},
+            {"lost", s.lost},
+            {"hamiltonian_violations", s.hamiltonian_violations},
+            {"walk_boundary_exits", s.walk_boundary_exits},
+            {"display_weight", io::json_number(s.display_weight)},
+            {"lost_weight", io::json_number(s.lost_weight)},
+            {"absorbed_weight", io::json_number(s.absorbed_weight)}};
 }
 
-double number_at(const JsonValue& v, size_t i, const std::string& file, const std::string& what) {
-    if (v.type != JsonValue::Type::Array || v.array.size() <= i || v.array[i].type != JsonValue::Type::Number)
-        throw std::runtime_error(fmt::format("{}: \"{}\" is not a list of numbers", file, what));
-    return v.array[i].number;
-}
-
-}  // namespace
-
-namespace {
-
-std::string stats_json(const PathStats& s) {
-    return fmt::format(
-        "{{\"paths\": {}, \"segments\": {}, \"segments_per_path\": {}, \"reflections\": {}, \"transmissions\": {}, "
-        "\"total_internal_reflections\": {}, \"absorbed_by_particles\": {}, \"absorbed_by_rim\": {}, "
-        "\"on_display\": {}, \"off_display\": {}, \"toward_camera\": {}, \"roulette_kills\": {}, \"truncated\": {}, "
-        "\"nan_events\": {}, \"spurious_candidates\": {}, \"guard_hits\": {}, \"leak_retries\": {}, "
-        "\"leaks_unresolved\": {}, \"grin_segments\": {}, \"grin_evaluations\": {}, \"tet_crossings\": {}, "
-        "\"lost\": {}, \"hamiltonian_violations\": {}, \"walk_boundary_exits\": {}, "
-        "\"display_weight\": {}, \"lost_weight\": {}, \"absorbed_weight\": {}}}",
-        s.paths, s.segments, json_number(s.paths ? double(s.segments) / double(s.paths) : 0.0), s.reflections,
-        s.transmissions, s.tir, s.absorbed_particle, s.absorbed_rim, s.on_display, s.off_display, s.toward_camera,
-        s.roulette_kills, s.truncated, s.nan_events, s.spurious_candidates, s.guard_hits, s.leak_retries,
-        s.leaks_unresolved, s.grin_segments, s.grin_evaluations, s.tet_crossings, s.lost, s.hamiltonian_violations,
-        s.walk_boundary_exits, json_number(s.display_weight), json_number(s.lost_weight), json_number(s.absorbed_weight));
+// The value at `path` (keys from the root) of run.json, which must be a list of at least n
+// numbers; std::runtime_error naming the file and the key otherwise.
+std::vector<double> numbers_at(const io::Json& root, const std::vector<std::string>& path, std::size_t n,
+                               const std::string& file) {
+    std::string key;
+    const io::Json* v = &root;
+    for (const std::string& k : path) {
+        key += (key.empty() ? "" : ".") + k;
+        if (!v->is_object() || !v->contains(k)) throw std::runtime_error(fmt::format("{}: missing \"{}\"", file, key));
+        v = &(*v)[k];
+    }
+    std::vector<double> out;
+    if (v->is_array())
+        for (const io::Json& x : *v)
+            if (x.is_number()) out.push_back(x.get<double>());
+    if (!v->is_array() || out.size() != v->size() || out.size() < n)
+        throw std::runtime_error(fmt::format("{}: \"{}\" is not a list of {} numbers", file, key, n));
+    return out;
 }
 
 }  // namespace
 
 void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
-                    int threads, const std::string& result, const StageReport& report) {
-    const std::string run_json = fmt::format(
-        "{{\n  \"ltmsim_version\": \"{}\",\n  \"scene\": {},\n  \"seed\": {},\n  \"representation\": \"{}\",\n"
-        "  \"threads\": {},\n  \"result\": {},\n  \"render_seconds\": {},\n  \"stages\": {},\n  \"path_statistics\": {}\n}}\n",
-        kVersion, scene_to_json(scene, 2), scene.seed, to_string(representation), threads, result, json_number(r.seconds),
-        report.to_json(), stats_json(r.stats));
-    io::write_file((fs::path(dir) / "run.json").string(), run_json, "run record");
+                    int threads, const io::Json& result, const StageReport& report) {
+    const io::Json run = {{"ltmsim_version", kVersion},
+                          {"scene", scene_to_json(scene)},
+                          {"seed", scene.seed},
+                          {"representation", to_string(representation)},
+                          {"threads", threads},
+                          {"result", result},
+                          {"render_seconds", io::json_number(r.seconds)},
+                          {"stages", report.to_json()},
+                          {"path_statistics", stats_json(r.stats)}};
+    io::write_json_file((fs::path(dir) / "run.json").string(), run, "run record");
 }
 
 void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
@@ -92,8 +110,7 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
         write_feature_images(dir, run.features);
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
-                       fmt::format("{{\"rows\": {}, \"cols\": {}, \"nnz\": {}, \"reference_pixels\": {}}}", r.T.rows,
-                                   r.T.cols, r.T.nnz(), run.reference_pixels),
+                       {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}},
                        report);
     } catch (...) {
         for (const auto& p : written) fs::remove(p, ec);
@@ -108,26 +125,19 @@ RenderGeometry render_geometry(const Scene& s) {
 
 RenderGeometry read_render_geometry(const std::string& dir) {
     const std::string file = (fs::path(dir) / "run.json").string();
-    std::ifstream in(file);
-    if (!in) throw std::runtime_error(fmt::format("{}: cannot read (it holds the camera and display of the render)", file));
-    std::stringstream ss;
-    ss << in.rdbuf();
-    JsonValue root;
-    try {
-        root = parse_json_line(ss.str());
-    } catch (const JsonError& e) {
-        throw std::runtime_error(fmt::format("{}: malformed JSON ({})", file, e.what()));
-    }
-    const JsonValue& scene = member(root, "scene", file);
-    const JsonValue& cam = member(scene, "camera", file);
-    const JsonValue& disp = member(scene, "display", file);
+    if (!fs::exists(file))
+        throw std::runtime_error(fmt::format("{}: cannot read (it holds the camera and display of the render)", file));
+    const io::Json root = io::read_json_file(file, "run record");
+    const auto camera = numbers_at(root, {"scene", "camera", "resolution"}, 2, file);
+    const auto display = numbers_at(root, {"scene", "display", "resolution"}, 2, file);
+    const auto size = numbers_at(root, {"scene", "display", "size"}, 2, file);
     RenderGeometry g;
-    g.camera_columns = static_cast<int>(number_at(member(cam, "resolution", file), 0, file, "camera.resolution"));
-    g.camera_rows = static_cast<int>(number_at(member(cam, "resolution", file), 1, file, "camera.resolution"));
-    g.display.Q = static_cast<int>(number_at(member(disp, "resolution", file), 0, file, "display.resolution"));
-    g.display.P = static_cast<int>(number_at(member(disp, "resolution", file), 1, file, "display.resolution"));
-    g.display.width = number_at(member(disp, "size", file), 0, file, "display.size");
-    g.display.height = number_at(member(disp, "size", file), 1, file, "display.size");
+    g.camera_columns = static_cast<int>(camera[0]);
+    g.camera_rows = static_cast<int>(camera[1]);
+    g.display.Q = static_cast<int>(display[0]);
+    g.display.P = static_cast<int>(display[1]);
+    g.display.width = size[0];
+    g.display.height = size[1];
     return g;
 }
 

@@ -9,6 +9,7 @@
 #include "features/Features.h"
 #include "scene/Scene.h"
 #include "io/CsrMatrix.h"
+#include "io/Json.h"
 #include "geometry/StageReport.h"
 #include "study/SceneRun.h"
 #include "trace/Render.h"
@@ -26,7 +27,7 @@ RenderGeometry render_geometry(const Scene& scene);
 // DIR/run.json: the resolved scene, seed, version, representation, timings and path statistics;
 // `result` is a JSON object describing what was rendered.
 void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
-                    int threads, const std::string& result, const StageReport& report);
+                    int threads, const io::Json& result, const StageReport& report);
 
 // A render folder: DIR/ltm.npz, DIR/reference.exr (for a scene with defects), DIR/features.exr
 // and DIR/features.npz with DIR/features/*.png, and DIR/run.json (written last). On failure the

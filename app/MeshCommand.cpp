@@ -12,7 +12,7 @@
 #include "defects/SolidBuilder.h"
 #include "geometry/MeshExport.h"
 #include "geometry/VtuExport.h"
-#include "io/AtomicFile.h"
+#include "io/Json.h"
 
 namespace ltm::app {
 
@@ -24,16 +24,19 @@ struct MeshArgs {
     int threads = 0;
 };
 
-std::string stats_json(const Scene& scene, const Solid& solid, const StageReport& report) {
+io::Json stats_json(const Scene& scene, const Solid& solid, const StageReport& report) {
     size_t tetrahedra = 0;
     for (const TetMesh& r : solid.regions) tetrahedra += r.num_tets();
-    return fmt::format(
-        "{{\n  \"scene\": \"{}\",\n  \"triangles\": {},\n  \"vertices\": {},\n  \"surfaces\": {},\n"
-        "  \"object_chord_error_mm\": {:.6g},\n  \"max_defect_chord_error_mm\": {:.6g},\n"
-        "  \"boolean_operations\": {},\n  \"enclosed_defects\": {},\n  \"tetrahedra\": {},\n  \"stages\": {}\n}}\n",
-        scene.source, solid.mesh.num_triangles(), solid.mesh.num_vertices(), solid.surfaces.size(),
-        solid.object_chord_error, solid.max_defect_chord_error, solid.boolean_operations, solid.enclosed_defects,
-        tetrahedra, report.to_json());
+    return {{"scene", scene.source},
+            {"triangles", solid.mesh.num_triangles()},
+            {"vertices", solid.mesh.num_vertices()},
+            {"surfaces", solid.surfaces.size()},
+            {"object_chord_error_mm", io::json_number(solid.object_chord_error)},
+            {"max_defect_chord_error_mm", io::json_number(solid.max_defect_chord_error)},
+            {"boolean_operations", solid.boolean_operations},
+            {"enclosed_defects", solid.enclosed_defects},
+            {"tetrahedra", tetrahedra},
+            {"stages", report.to_json()}};
 }
 
 // The boundary faces of a tetrahedral mesh (faces without a neighbour), wound outward.
@@ -126,7 +129,7 @@ int run(const MeshArgs& a) {
             t.done(a.output);
         }
     }
-    if (!a.stats.empty()) io::write_file(a.stats, stats_json(scene, solid, report), "mesh statistics");
+    if (!a.stats.empty()) io::write_json_file(a.stats, stats_json(scene, solid, report), "mesh statistics");
     if (a.verbose) {
         std::cerr << fmt::format("ltmsim mesh {} -> {}\n", a.scene, a.output) << verbose_stages(report);
     }

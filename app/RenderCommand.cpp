@@ -134,7 +134,7 @@ int run(const RenderArgs& a) {
                 write_png((dir / "image.png").string(), preview);
                 written.push_back(dir / "image.png");
                 write_run_json(a.dir, scene, r, representation, a.threads,
-                               fmt::format("{{\"pattern\": {}, \"image\": \"image.exr\"}}", json_string(a.pattern)),
+                               {{"pattern", a.pattern}, {"image", "image.exr"}},
                                report);
             } catch (...) {
                 for (const auto& p : written) fs::remove(p, ec);

@@ -4,13 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
-#include <fstream>
 #include <iostream>
 
 #include "app/Commands.h"
-#include "app/JsonLine.h"
 #include "app/SceneSetup.h"
-#include "scene/SceneJson.h"
+#include "io/InputError.h"
+#include "io/Json.h"
 #include "trace/Tracer.h"
 
 namespace ltm::app {
@@ -26,60 +25,47 @@ struct InputRay {
     Vec3 origin, direction;
 };
 
-// Reads and checks every line before anything is traced: bad input prints FILE:LINE[:COL] and
-// the problem, and nothing is written.
-bool read_rays(const std::string& path, std::vector<InputRay>& out) {
-    std::ifstream in(path);
-    if (!in) {
-        std::cerr << fmt::format("{}: cannot read rays file\n", path);
-        return false;
-    }
-    std::string line;
-    for (size_t n = 1; std::getline(in, line); ++n) {
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;  // blank lines are allowed
-        auto bad = [&](const std::string& what) {
-            std::cerr << fmt::format("{}:{}: {}\n", path, n, what);
-            return false;
-        };
-        JsonValue v;
-        try {
-            v = parse_json_line(line);
-        } catch (const JsonError& e) {
-            std::cerr << fmt::format("{}:{}:{}: malformed JSON: {}\n", path, n, e.column, e.what());
-            return false;
-        }
-        if (v.type != JsonValue::Type::Object) return bad("expected an object {\"origin\": [x, y, z], \"direction\": [dx, dy, dz]}");
+// Reads and checks every line before anything is traced: bad input throws InputError
+// "FILE:LINE[:COL]: problem", and nothing is written.
+std::vector<InputRay> read_rays(const std::string& path) {
+    std::vector<InputRay> out;
+    io::JsonLinesReader lines(path, "rays file");
+    for (io::Json v; lines.next(v);) {
+        if (!v.is_object()) lines.fail("expected an object {\"origin\": [x, y, z], \"direction\": [dx, dy, dz]}");
         InputRay r;
-        bool has_o = false, has_d = false;
-        for (const auto& [key, val] : v.object) {
+        for (const auto& [key, val] : v.items()) {
             if (key != "origin" && key != "direction")
-                return bad(fmt::format("unknown key \"{}\" (expected \"origin\" and \"direction\")", key));
-            if (val.type != JsonValue::Type::Array || val.array.size() != 3)
-                return bad(fmt::format("\"{}\" must be a list of 3 numbers", key));
+                lines.fail(fmt::format("unknown key \"{}\" (expected \"origin\" and \"direction\")", key));
+            if (!val.is_array() || val.size() != 3)
+                lines.fail(fmt::format("\"{}\" must be a list of 3 numbers", key));
             Vec3 x;
             for (int i = 0; i < 3; ++i) {
-                if (val.array[static_cast<size_t>(i)].type != JsonValue::Type::Number)
-                    return bad(fmt::format("\"{}\" must be a list of 3 numbers", key));
-                x[i] = val.array[static_cast<size_t>(i)].number;
+                const io::Json& c = val[static_cast<size_t>(i)];
+                if (!c.is_number()) lines.fail(fmt::format("\"{}\" must be a list of 3 numbers", key));
+                x[i] = c.get<double>();
             }
-            if (!is_finite(x)) return bad(fmt::format("\"{}\" must be finite", key));
+            if (!is_finite(x)) lines.fail(fmt::format("\"{}\" must be finite", key));
             (key == "origin" ? r.origin : r.direction) = x;
-            (key == "origin" ? has_o : has_d) = true;
         }
-        if (!has_o) return bad("missing key \"origin\"");
-        if (!has_d) return bad("missing key \"direction\"");
+        if (!v.contains("origin")) lines.fail("missing key \"origin\"");
+        if (!v.contains("direction")) lines.fail("missing key \"direction\"");
         // Any finite non-zero vector is a direction (the tracer normalises it, whatever its size).
-        if (r.direction == Vec3{0, 0, 0}) return bad("\"direction\" must not be the zero vector");
+        if (r.direction == Vec3{0, 0, 0}) lines.fail("\"direction\" must not be the zero vector");
         out.push_back(r);
     }
-    return true;
+    return out;
 }
 
-std::string vec3(const Vec3& v) { return fmt::format("[{}, {}, {}]", json_number(v.x), json_number(v.y), json_number(v.z)); }
+io::Json vec3(const Vec3& v) { return {io::json_number(v.x), io::json_number(v.y), io::json_number(v.z)}; }
 
 int run(const TraceRaysArgs& a) {
     std::vector<InputRay> rays;
-    if (!read_rays(a.rays, rays)) return 2;
+    try {
+        rays = read_rays(a.rays);
+    } catch (const InputError& e) {
+        std::cerr << e.what() << "\n";
+        return 2;
+    }
     StageReport report;
     int status = 0;
     auto loaded = load_scene_and_solid(a.scene, report, status);
@@ -99,17 +85,17 @@ int run(const TraceRaysArgs& a) {
     std::string out;
     for (const auto& r : rays) {
         const PrincipalPath p = tracer.principal_path(r.origin, r.direction);
-        std::string verts = "[", names = "[";
+        io::Json vertices = io::Json::array(), surfaces = io::Json::array();
         for (size_t i = 0; i < p.vertices.size(); ++i) {
-            verts += (i ? ", " : "") + vec3(p.vertices[i]);
-            names += (i ? ", " : "") + json_string(loaded->solid.surfaces[p.tags[i]].name);
+            vertices.push_back(vec3(p.vertices[i]));
+            surfaces.push_back(loaded->solid.surfaces[p.tags[i]].name);
         }
-        verts += "]";
-        names += "]";
-        const std::string hit = p.display_hit ? fmt::format("[{}, {}]", json_number(p.x), json_number(p.y)) : "null";
-        const std::string pix = p.display_hit ? fmt::format("[{}, {}]", p.p, p.q) : "null";
-        out += fmt::format("{{\"vertices\": {}, \"surfaces\": {}, \"direction\": {}, \"display_hit\": {}, \"display_pixel\": {}}}\n",
-                           verts, names, vec3(p.direction), hit, pix);
+        io::Json line = {{"vertices", vertices},
+                         {"surfaces", surfaces},
+                         {"direction", vec3(p.direction)},
+                         {"display_hit", p.display_hit ? io::Json{io::json_number(p.x), io::json_number(p.y)} : io::Json()},
+                         {"display_pixel", p.display_hit ? io::Json{p.p, p.q} : io::Json()}};
+        out += line.dump() + "\n";
     }
     std::cout << out << std::flush;
     return 0;

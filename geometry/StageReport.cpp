@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "io/Json.h"
+
 namespace ltm {
 
 std::string StageReport::to_text() const {
@@ -10,24 +12,10 @@ std::string StageReport::to_text() const {
     return out;
 }
 
-static std::string json_escape(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        if (c == '"' || c == '\\') { o += '\\'; o += c; }
-        else if (static_cast<unsigned char>(c) < 0x20) o += fmt::format("\\u{:04x}", static_cast<int>(c));
-        else o += c;
-    }
-    return o;
-}
-
-std::string StageReport::to_json() const {
-    std::string out = "[";
-    for (size_t i = 0; i < stages_.size(); ++i) {
-        const auto& s = stages_[i];
-        out += fmt::format("{}{{\"stage\": \"{}\", \"seconds\": {:.6g}, \"detail\": \"{}\"}}", i ? ", " : "",
-                           json_escape(s.name), s.seconds, json_escape(s.detail));
-    }
-    return out + "]";
+io::Json StageReport::to_json() const {
+    io::Json out = io::Json::array();
+    for (const auto& s : stages_) out.push_back({{"stage", s.name}, {"seconds", s.seconds}, {"detail", s.detail}});
+    return out;
 }
 
 }  // namespace ltm

@@ -2,6 +2,7 @@
 // What ran, how long it took and how big its output was: printed by --verbose, written to the
 // stats file, and checked by tests (a defect-free scene must not run a Boolean).
 #include <chrono>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -25,7 +26,8 @@ public:
         return false;
     }
     std::string to_text() const;
-    std::string to_json() const;
+    // [{"stage": name, "seconds": s, "detail": text}, ...] in the order run (an io::Json).
+    nlohmann::ordered_json to_json() const;
 
 private:
     std::vector<Stage> stages_;

@@ -18,12 +18,12 @@
 
 #include <string>
 
-#include "scene/InputError.h"
+#include "io/InputError.h"
 #include "scene/Scene.h"
 
 namespace ltm {
 
-// A problem in a scene file: an InputError (scene/InputError.h), e.g.
+// A problem in a scene file: an InputError (io/InputError.h), e.g.
 // "scene.yaml:9:47: defects[0].radius: must be a positive length (mm), got -0.1".
 // The loader is built on the strict YAML engine of scene/StrictYaml.h.
 using SceneError = InputError;

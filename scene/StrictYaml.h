@@ -37,7 +37,7 @@
 #include <vector>
 
 #include "geometry/Vec3.h"
-#include "scene/InputError.h"
+#include "io/InputError.h"
 
 namespace ltm::yaml {
 

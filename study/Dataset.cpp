@@ -12,7 +12,7 @@
 #include <fmt/format.h>
 #include <fstream>
 #include <mutex>
-#include <nlohmann/json.hpp>
+#include "io/Json.h"
 #include <sstream>
 #include <thread>
 
@@ -33,7 +33,7 @@
 namespace ltm {
 
 namespace fs = std::filesystem;
-using json = nlohmann::ordered_json;
+using json = io::Json;
 
 namespace {
 
@@ -190,7 +190,7 @@ bool check_folder(const DatasetSpec& spec, const DatasetOptions& o) {
     const std::string sha = io::sha256_hex(spec.canonical);
     json theirs;
     try {
-        theirs = json::parse(read_text(id));
+        theirs = io::read_json_file(id.string(), "dataset description");
     } catch (const std::exception& e) {
         throw DatasetError(fmt::format("{}: not a dataset description ({})", id.string(), e.what()));
     }
@@ -204,7 +204,7 @@ bool check_folder(const DatasetSpec& spec, const DatasetOptions& o) {
 void write_identity(const DatasetSpec& spec, const DatasetOptions& o) {
     const fs::path dir(o.out);
     fs::create_directories(dir / "samples");
-    io::write_file((dir / "dataset.json").string(), identity(spec, o.version).dump(2) + "\n", "dataset description");
+    io::write_json_file((dir / "dataset.json").string(), identity(spec, o.version), "dataset description");
     if (!fs::exists(dir / "spec.yaml")) io::write_file((dir / "spec.yaml").string(), o.spec_text, "spec copy");
 }
 
@@ -338,7 +338,7 @@ IndexSummary build_dataset_index(const std::string& dir_text) {
         throw DatasetError(fmt::format("{}: no dataset.json: not an ltmsim dataset folder", dir_text));
     json ident;
     try {
-        ident = json::parse(read_text(id));
+        ident = io::read_json_file(id.string(), "dataset description");
     } catch (const std::exception& e) {
         throw DatasetError(fmt::format("{}: not a dataset description ({})", id.string(), e.what()));
     }
@@ -357,7 +357,7 @@ IndexSummary build_dataset_index(const std::string& dir_text) {
             s.corrupt.push_back(i);
             continue;
         }
-        json L = json::parse(read_text(f / "labels.json"));
+        json L = io::read_json_file((f / "labels.json").string(), "labels");
         json line;
         line["sample"] = i;
         line["folder"] = "samples/" + sample_name(i);
@@ -372,7 +372,7 @@ IndexSummary build_dataset_index(const std::string& dir_text) {
         ++s.present;
     }
     io::write_file((dir / "index.jsonl").string(), index, "dataset index");
-    io::write_file((dir / "annotations.json").string(), coco_annotations(labels).dump() + "\n", "COCO annotations");
+    io::write_json_file((dir / "annotations.json").string(), coco_annotations(labels), "COCO annotations", -1);
     std::string spec_text;
     try {
         spec_text = read_text(dir / "spec.yaml");

@@ -11,7 +11,7 @@
 namespace ltm {
 
 namespace fs = std::filesystem;
-using json = nlohmann::ordered_json;
+using json = io::Json;
 
 int coco_category(DefectType kind) {
     switch (kind) {

@@ -1,7 +1,7 @@
 #pragma once
 // What a dataset says about its samples: labels.json per sample, and the COCO annotations of the
 // whole dataset built from them (docs/dataset.md, "labels.json", "annotations.json").
-#include <nlohmann/json.hpp>
+#include "io/Json.h"
 #include <string>
 #include <vector>
 
@@ -18,7 +18,7 @@ int coco_category(DefectType kind);
 
 // A defect's physical parameters as its scene file gives them (mm, degrees), plus derived sizes:
 // "size" (the largest semi-axis of an ellipsoid, a scratch's width) and, for scratches, "length".
-nlohmann::ordered_json defect_parameters(const Lens& lens, const Defect& d);
+io::Json defect_parameters(const Lens& lens, const Defect& d);
 
 // labels.json of a sample: its index, seed, split, the image size, the ground-truth rule, and per
 // defect its id (the mask value), kind, spec entry, parameters, camera-pixel bounding box
@@ -29,7 +29,7 @@ std::string sample_labels_json(const DatasetSpec& spec, const SampleDraw& sample
 // COCO instance segmentation from the samples' labels.json (parsed, in sample order): one image
 // per sample (id = sample index), one annotation per defect with pixels in the mask (RLE, bbox,
 // area, category, iscrowd 0, and the physical parameters, visibility and split as attributes).
-nlohmann::ordered_json coco_annotations(const std::vector<nlohmann::ordered_json>& labels);
+io::Json coco_annotations(const std::vector<io::Json>& labels);
 
 // previews/<channel>.png (pseudo colour) and previews/mask.png (an 8-bit, colour-coded view of the
 // instance mask) of a sample.

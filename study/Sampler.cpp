@@ -7,7 +7,7 @@
 #include "defects/DefectSolid.h"
 #include "defects/Sampling.h"
 #include "geometry/Lens.h"
-#include "scene/InputError.h"
+#include "io/InputError.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneYaml.h"
 #include "trace/Rng.h"

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include "io/Json.h"
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "scene/StrictYaml.h"

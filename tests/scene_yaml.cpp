@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "io/Json.h"
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneYaml.h"

@@ -11,7 +11,8 @@
 #include <random>
 
 #include "defects/DefectSolid.h"
-#include "scene/InputError.h"
+#include "io/InputError.h"
+#include "io/Json.h"
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "study/Coco.h"
@@ -216,7 +217,7 @@ object: {ior: {normal: [1.5168, 0.001]}}
         seeds[a.seed] = i;
         // What scene.yaml says is what is rendered: it loads back to the same scene.
         const Scene back = parse_scene(a.scene_yaml, a.scene.source);
-        EXPECT_EQ(scene_to_json(back, 0), scene_to_json(a.scene, 0));
+        EXPECT_EQ(scene_to_json(back), scene_to_json(a.scene));
         EXPECT_EQ(a.defect_free, a.scene.defects.empty());
         EXPECT_LE(a.scene.defects.size(), static_cast<size_t>(kMaxDefectsPerSample));
         EXPECT_EQ(a.kinds.size(), a.scene.defects.size());

@@ -1,6 +1,4 @@
-#include "scene/InputError.h"
-
-#include <fmt/format.h>
+#include "io/InputError.h"
 
 #include <utility>
 
@@ -11,8 +9,9 @@ namespace {
 std::string compose_message(const std::string& file, int line, int column, const std::string& key_path,
                             const std::string& message) {
     if (line <= 0) return file + ": " + message;
-    if (key_path.empty()) return fmt::format("{}:{}:{}: {}", file, line, column, message);
-    return fmt::format("{}:{}:{}: {}: {}", file, line, column, key_path, message);
+    std::string at = file + ":" + std::to_string(line) + ":";
+    if (column > 0) at += std::to_string(column) + ":";
+    return at + " " + (key_path.empty() ? "" : key_path + ": ") + message;
 }
 
 }  // namespace
