@@ -41,7 +41,7 @@ int run(const RenderArgs& a) {
     StageReport report;
     int status = 0;
     // auto and analytic trace closed forms where no defect cuts the glass: no mesh is built then.
-    auto loaded = load_scene_and_solid(a.scene, report, status, a.representation == "auto" || a.representation == "analytic");
+    auto loaded = load_scene_and_solid(a.scene, report, status, representation_uses_surfaces_only(a.representation));
     if (!loaded) return status;
     const Scene& scene = loaded->scene;
 
@@ -68,16 +68,9 @@ int run(const RenderArgs& a) {
         }
     }
 
-    Representation representation = Representation::Analytic;
-    std::string why;
-    if (a.representation == "auto") representation = auto_representation(loaded->solid);
-    else if (a.representation == "refined") representation = Representation::Refined;
-    else if (a.representation == "mesh-only") representation = Representation::MeshOnly;
-    else if (!Tracer::analytic_supported(loaded->solid, &why)) {
-        std::cerr << fmt::format("ltmsim render: {}: the analytic representation {}; use --representation refined\n",
-                                 scene.source, why);
-        return 2;
-    }
+    const std::optional<Representation> chosen = resolve_representation("render", a.representation, *loaded);
+    if (!chosen) return 2;
+    const Representation representation = *chosen;
 
     SceneRun run;
     if (pattern.empty()) {
@@ -160,9 +153,7 @@ void add_render_command(CLI::App& app) {
     cmd->add_option("--pattern", args->pattern, "Render y = T x for this display pattern image (PNG or EXR) instead");
     cmd->add_option("--threads", args->threads, "Threads (default: all cores); results do not depend on it")
         ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--representation", args->representation,
-                    "auto (analytic when no defect cuts the glass, else refined) | refined | analytic | mesh-only")
-        ->check(CLI::IsMember({"auto", "refined", "analytic", "mesh-only"}));
+    add_representation_option(cmd, args->representation, {"auto", "refined", "analytic", "mesh-only"});
     cmd->add_flag("--no-robust", args->no_robust, "Embree's fast (non-watertight) traversal");
     cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");

@@ -6,6 +6,7 @@
 
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
+#include "study/SceneRun.h"
 
 namespace ltm::app {
 
@@ -54,6 +55,30 @@ bool output_folder_ok(const std::string& command, const std::string& dir) {
         return false;
     }
     return true;
+}
+
+std::optional<Representation> resolve_representation(const std::string& command, const std::string& name,
+                                                     const LoadedScene& loaded) {
+    if (name == "auto") return auto_representation(loaded.solid);
+    if (name == "refined") return Representation::Refined;
+    if (name == "mesh-only") return Representation::MeshOnly;
+    if (name != "analytic") throw std::invalid_argument("unknown representation '" + name + "'");
+    std::string why;
+    if (!Tracer::analytic_supported(loaded.solid, &why)) {
+        std::cerr << fmt::format("ltmsim {}: {}: the analytic representation {}; use --representation refined\n", command,
+                                 loaded.scene.source, why);
+        return std::nullopt;
+    }
+    return Representation::Analytic;
+}
+
+void add_representation_option(CLI::App* cmd, std::string& value, const std::vector<std::string>& choices) {
+    std::string help;
+    for (const std::string& c : choices) {
+        help += (help.empty() ? "" : " | ") + c;
+        if (c == "auto") help += " (analytic when no defect cuts the glass, else refined)";
+    }
+    cmd->add_option("--representation", value, help)->check(CLI::IsMember(choices));
 }
 
 }  // namespace ltm::app

@@ -1,12 +1,15 @@
 #pragma once
 // What every computing command does first: load the scene (strictly) and build its solid, turning
 // bad input into one message and exit status 2.
+#include <CLI/CLI.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "defects/SolidBuilder.h"
 #include "geometry/StageReport.h"
 #include "scene/Scene.h"
+#include "trace/Tracer.h"
 
 namespace ltm::app {
 
@@ -19,6 +22,21 @@ struct LoadedScene {
 // `surfaces_only`: no mesh unless a defect cuts the glass (for the analytic representation).
 std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status,
                                                 bool surfaces_only = false);
+
+// The one parser of --representation, for every command that takes it:
+//   auto       analytic when the tracer supports the solid analytically (no defect cuts the
+//              glass), else refined (study/SceneRun.h, auto_representation);
+//   refined | analytic | mesh-only   that representation; analytic is refused for a solid it
+//              does not support, with the reason.
+// `choices` restricts the names a command accepts (CLI11 checks them first, see
+// add_representation_option). On a refusal prints "ltmsim COMMAND: SOURCE: the analytic
+// representation ...; use --representation refined" and returns nothing (exit status 2).
+std::optional<Representation> resolve_representation(const std::string& command, const std::string& name,
+                                                     const LoadedScene& loaded);
+// Whether `name` needs no mesh where closed forms exist (auto and analytic).
+inline bool representation_uses_surfaces_only(const std::string& name) { return name == "auto" || name == "analytic"; }
+// Adds --representation to `cmd`, accepting the given names (a subset of auto, refined, analytic, mesh-only).
+void add_representation_option(CLI::App* cmd, std::string& value, const std::vector<std::string>& choices);
 
 // The stages that ran (--verbose), then what did not run: "(no Boolean ran)" for a scene whose
 // defects cut nothing, "(no TetGen ran)" for one without a meshed index region.

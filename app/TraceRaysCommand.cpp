@@ -68,19 +68,13 @@ int run(const TraceRaysArgs& a) {
     }
     StageReport report;
     int status = 0;
-    auto loaded = load_scene_and_solid(a.scene, report, status);
+    // auto and analytic trace closed forms where no defect cuts the glass: no mesh is built then.
+    auto loaded = load_scene_and_solid(a.scene, report, status, representation_uses_surfaces_only(a.representation));
     if (!loaded) return status;
+    const std::optional<Representation> chosen = resolve_representation("trace-rays", a.representation, *loaded);
+    if (!chosen) return 2;
     TracerOptions topt;
-    std::string why;
-    const bool analytic_ok = Tracer::analytic_supported(loaded->solid, &why);
-    if (a.representation == "analytic" && !analytic_ok) {
-        std::cerr << fmt::format("ltmsim trace-rays: {}: the analytic representation {}\n", loaded->scene.source, why);
-        return 2;
-    }
-    topt.representation = a.representation == "refined"     ? Representation::Refined
-                           : a.representation == "mesh-only" ? Representation::MeshOnly
-                           : (a.representation == "analytic" || analytic_ok) ? Representation::Analytic
-                                                                             : Representation::Refined;
+    topt.representation = *chosen;
     const Tracer tracer(loaded->scene, loaded->solid, topt);
     std::string out;
     for (const auto& r : rays) {
@@ -110,8 +104,7 @@ void add_trace_rays_command(CLI::App& app) {
     cmd->add_option("--rays", args->rays, "Rays: one {\"origin\": [x,y,z], \"direction\": [dx,dy,dz]} per line")->required();
     cmd->add_option("--threads", args->threads, "Threads (accepted for uniformity; rays are traced in order)")
         ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--representation", args->representation, "auto | refined | analytic | mesh-only")
-        ->check(CLI::IsMember({"auto", "refined", "analytic", "mesh-only"}));
+    add_representation_option(cmd, args->representation, {"auto", "refined", "analytic", "mesh-only"});
     cmd->callback([args] { run_guarded("trace-rays", [&] { return run(*args); }); });
 }
 

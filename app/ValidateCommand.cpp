@@ -29,7 +29,9 @@ int run(const ValidateArgs& a) {
         std::cerr << fmt::format("ltmsim validate: {}: no analytic reference for this scene: {}\n", loaded->scene.source, why);
         return 2;
     }
-    const Representation rep = a.representation == "analytic" ? Representation::Analytic : Representation::Refined;
+    const std::optional<Representation> chosen = resolve_representation("validate", a.representation, *loaded);
+    if (!chosen) return 2;
+    const Representation rep = *chosen;
     const validation::ValidationReport main = validation::validate(loaded->scene, loaded->solid, rep, a.density);
     std::cout << validation::format_report(main, true);
     // The facets alone, for comparison (straight segments only: not for graded-index glass).
@@ -48,8 +50,7 @@ void add_validate_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("validate", "Check traced paths against analytic Snell's-law solutions");
     cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
     cmd->add_option("--density", args->density, "Ray set density (1: ~200 rays)")->check(CLI::PositiveNumber);
-    cmd->add_option("--representation", args->representation, "refined | analytic")
-        ->check(CLI::IsMember({"refined", "analytic"}));
+    add_representation_option(cmd, args->representation, {"refined", "analytic"});
     cmd->add_option("--threads", args->threads, "Threads (accepted for uniformity; rays are traced in order)")
         ->check(CLI::NonNegativeNumber);
     cmd->callback([args] { run_guarded("validate", [&] { return run(*args); }); });

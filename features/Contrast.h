@@ -3,7 +3,7 @@
 // against its surround, and a robust count of outlying pixels (false positives in a defect-free
 // image).
 //
-// Images are camera images in the conventions' order (docs: /work/shared/conventions.md): width
+// Images are camera images in the conventions' order (docs: docs/conventions.md): width
 // N columns, height M rows, pixel (m, n) at index k = m * N + n, row 0 the top (+y) edge.
 // Positions (cx, cy) are in pixel units on the image's own axes: x to the right along columns,
 // y DOWN along rows, the top-left corner of the image at (0, 0), so camera pixel (m, n) is the

@@ -2,7 +2,7 @@
 // Features of the rows of a light transport matrix T: one value per camera pixel, computed from
 // that pixel's correspondence vector (its row of T, the display pixels it sees and how much).
 //
-// Indices (docs: /work/shared/conventions.md, "Pixel indices"): row k = m * N + n is camera pixel
+// Indices (docs: docs/conventions.md, "Pixel indices"): row k = m * N + n is camera pixel
 // (m, n), column l = p * Q + q is display pixel (p, q); rows m and p count from the +y (top) edge
 // down, columns n and q from the -x edge. Feature images are camera-sized, row-major, row 0 on top
 // (the io/Image.h orientation), so they can go straight to write_exr.

@@ -3,7 +3,7 @@
 // uses and the one `ltm.npz` stores (io/LtmFile.h).
 //
 // Row k is camera pixel k = m * N + n, column l is display pixel l = p * Q + q
-// (docs: /work/shared/conventions.md, "Pixel indices"). The nonzeros of row r are
+// (docs: docs/conventions.md, "Pixel indices"). The nonzeros of row r are
 // indices[indptr[r] .. indptr[r+1]) with their values in data[...] at the same positions; the
 // columns of a row are strictly increasing (scipy's "canonical format": sorted, no duplicates).
 #include <cstddef>

@@ -2,7 +2,7 @@
 // Images in and out: display patterns read from PNG or OpenEXR, previews written as 8-bit PNG,
 // masks as 16-bit greyscale PNG, feature images written as multi-channel float OpenEXR.
 //
-// Orientation (docs: /work/shared/conventions.md): row 0 of an Image is the +y (top) edge of the
+// Orientation (docs: docs/conventions.md): row 0 of an Image is the +y (top) edge of the
 // picture, column 0 the -x (left) edge; this is also the first row stored in a PNG and the first
 // scan line (lowest y of the data window) of an EXR, so a file looks the same in any viewer as
 // the camera or display sees it. For a display pattern, Image row p, column q is display pixel

@@ -1,4 +1,4 @@
-// The `ltmsim render` command's contract (docs: /work/shared/conventions.md, "Command line" and
+// The `ltmsim render` command's contract (docs: docs/conventions.md, "Command line" and
 // "The light transport matrix"): DIR/ltm.npz (scipy CSR, float32, M*N x P*Q) and DIR/run.json;
 // results independent of --threads; existing outputs kept unless --overwrite; --pattern renders
 // y = T x (DIR/image.exr with "Image" and "StdError", DIR/image.png, no ltm.npz); bad input exits

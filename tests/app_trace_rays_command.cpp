@@ -1,4 +1,4 @@
-// The `ltmsim trace-rays` command's contract (docs: /work/shared/conventions.md, "Command line"):
+// The `ltmsim trace-rays` command's contract (docs: docs/conventions.md, "Command line"):
 // one JSON object per input ray, in input order, on standard output,
 //   {"vertices": [[x,y,z], ...], "surfaces": ["front", ...], "direction": [dx,dy,dz],
 //    "display_hit": [x, y] | null, "display_pixel": [p, q] | null},

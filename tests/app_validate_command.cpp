@@ -1,4 +1,4 @@
-// The `ltmsim validate` command's contract (docs: /work/shared/conventions.md, "Command line"):
+// The `ltmsim validate` command's contract (docs: docs/conventions.md, "Command line"):
 // traced paths against analytic Snell's-law solutions, non-zero exit above tolerance. Every
 // shipped scene the analytic reference models passes (exit 0, "PASSED"), as do the paper's lens
 // scaled by 1e-3 and 1e3 (the tolerances scale with the scene's length scale,
