@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <iterator>
 #include <set>
 #include <sstream>
@@ -147,19 +148,32 @@ void write_json_file(const std::string& path, const Json& value, const std::stri
     write_file(path, value.dump(indent) + "\n", kind);
 }
 
-JsonLinesReader::JsonLinesReader(std::string path, const std::string& kind) : path_(std::move(path)), in_(path_) {
-    if (!in_) throw InputError(path_, 0, 0, "", "cannot read " + kind + ": " + std::strerror(errno));
+JsonLinesReader::JsonLinesReader(std::string path, const std::string& kind)
+    : path_(std::move(path)), file_(path_, std::ios::binary), in_(&file_) {
+    if (!file_) throw InputError(path_, 0, 0, "", "cannot read " + kind + ": " + std::strerror(errno));
+    std::error_code ec;
+    if (std::filesystem::is_directory(path_, ec)) throw InputError(path_, 0, 0, "", "cannot read " + kind + ": it is a folder");
 }
+
+JsonLinesReader::JsonLinesReader(std::istream& in, std::string name) : path_(std::move(name)), in_(&in) {}
 
 bool JsonLinesReader::next(Json& value) {
     std::string text;
-    while (std::getline(in_, text)) {
+    std::streambuf* buf = in_->rdbuf();
+    for (;;) {
+        text.clear();
+        int c = buf ? buf->sbumpc() : std::char_traits<char>::eof();
+        if (c == std::char_traits<char>::eof()) return false;
         ++line_;
+        for (; c != std::char_traits<char>::eof() && c != '\n'; c = buf->sbumpc()) {
+            if (text.size() == kMaxJsonLine)
+                fail("line longer than " + std::to_string(kMaxJsonLine) + " bytes (one JSON value per line is expected)");
+            text.push_back(static_cast<char>(c));
+        }
         if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
         value = parse_json(text, path_, line_);
         return true;
     }
-    return false;
 }
 
 void JsonLinesReader::fail(const std::string& what) const { throw InputError(path_, line_, 0, "", what); }

@@ -54,10 +54,15 @@ void write_json_file(const std::string& path, const Json& value, const std::stri
 
 // A JSON-lines file (one value per line, https://jsonlines.org), read line by line. Blank lines
 // (only spaces, tabs or a carriage return) are skipped but counted, so LINE is the line in the file.
+// A line longer than kMaxJsonLine bytes is an error (InputError "PATH:LINE: line longer than ..."),
+// found after reading at most that many bytes of it: a 1 GB line is refused, not loaded.
+inline constexpr std::size_t kMaxJsonLine = std::size_t(1) << 20;
 class JsonLinesReader {
 public:
     // InputError "<path>: cannot read <kind>" when the file cannot be opened.
     explicit JsonLinesReader(std::string path, const std::string& kind = "JSON lines file");
+    // Reads `in` (which must outlive the reader); `name` stands for the file in messages.
+    JsonLinesReader(std::istream& in, std::string name);
     // The next non-blank line's value; false at the end of the file.
     bool next(Json& value);
     // The line number (1-based) of the value last returned by next().
@@ -67,7 +72,8 @@ public:
 
 private:
     std::string path_;
-    std::ifstream in_;
+    std::ifstream file_;
+    std::istream* in_ = nullptr;
     int line_ = 0;
 };
 

@@ -122,6 +122,27 @@ TEST_F(JsonFiles, LinesCountBlankLinesAndFailNamesTheLine) {
               std::string::npos);
 }
 
+// A 1 GB line is refused after reading kMaxJsonLine bytes of it (the file is sparse: creating it
+// costs nothing, and reading it whole would take seconds and a gigabyte of memory).
+TEST_F(JsonFiles, AnOverlongLineIsRefusedWithoutLoadingIt) {
+    const std::string file = path("huge.jsonl");
+    write("huge.jsonl", "{\"a\": 1}\n");
+    std::filesystem::resize_file(file, std::uintmax_t(1) << 30);
+    ltm::io::JsonLinesReader r(file, "rays file");
+    Json v;
+    ASSERT_TRUE(r.next(v));
+    EXPECT_EQ(ltm::test::message_of([&] { r.next(v); }),
+              file + ":2: line longer than " + std::to_string(ltm::io::kMaxJsonLine) +
+                  " bytes (one JSON value per line is expected)");
+    // A line of exactly the limit is read (and here is malformed JSON, located on line 1).
+    write("edge.jsonl", std::string(ltm::io::kMaxJsonLine, 'x'));
+    ltm::io::JsonLinesReader e(path("edge.jsonl"));
+    EXPECT_NE(ltm::test::message_of([&] { e.next(v); }).find(path("edge.jsonl") + ":1:1: malformed JSON"), std::string::npos);
+    // A folder is no file.
+    EXPECT_NE(ltm::test::message_of([&] { ltm::io::JsonLinesReader d(dir.string(), "rays file"); }).find("it is a folder"),
+              std::string::npos);
+}
+
 TEST_F(JsonFiles, WrittenFilesReadBackEqual) {
     const Json v = {{"name", "a \"quoted\"\n\tname"}, {"values", {1, 2.5, -0.0}}, {"nested", {{"x", nullptr}}}};
     ltm::io::write_json_file(path("v.json"), v, "test record");
