@@ -11,15 +11,16 @@
 //   A ZIP archive, written by libzip, with one entry "<name>.npy" per array, in the order given.
 //   Each entry is deflate-compressed (ZIP method 8, raw deflate stream from zlib through libzip,
 //   level 6 by default as numpy.savez_compressed; level 0 stores it instead, ZIP method 0) with
-//   its CRC-32, a fixed timestamp (1980-01-01 00:00, DOS date 0x0021 time 0) and no extra fields
-//   (libzip's defaults otherwise: "version made by" Unix, no external attributes, no comment).
+//   its CRC-32, a fixed timestamp (1980-01-01 00:00, DOS date 0x0021 time 0), no extra fields and
+//   no comments; otherwise libzip's defaults for a new entry ("made by" Unix, version 6.3, file
+//   mode 0100666 in the external attributes; `zipinfo -v` shows all of it).
 //   Each .npy is format version 1.0 (io/Npy.h): "\x93NUMPY" 1 0, a little-endian uint16 header
 //   length, and the header "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }" padded
 //   with spaces and ended by '\n' so that the preamble is a multiple of 64 bytes (as numpy pads
 //   it); the array's bytes follow in C order (the last index varies fastest), in the byte order
 //   the descr states.
-//   ZIP64 where needed, as libzip decides: an entry larger than deflate's worst case below 4 GiB
-//   gets ZIP64 sizes in its local header; sizes or offsets beyond 0xFFFFFFFF get ZIP64 fields in
+//   ZIP64 where needed, as libzip decides: an entry that could compress to 4 GiB or more (by
+//   libzip's worst-case estimate of deflate) gets ZIP64 sizes in its local header; sizes or offsets beyond 0xFFFFFFFF get ZIP64 fields in
 //   the central directory, which then ends with a ZIP64 end-of-central-directory record and
 //   locator (also with 65535 entries or more). So archives above 4 GiB are written in full
 //   (APPNOTE 6.3, as Python's zipfile and numpy read them). Small archives have no ZIP64 fields.
