@@ -42,7 +42,7 @@ namespace ltm::io {
 //
 // Two modes:
 //   Mode::Stream  the caller writes the bytes through write() (with tell() and seek(): OpenEXR
-//                 and the ZIP writer go back to patch headers).
+//                 and libzip's write source go back to patch headers).
 //   Mode::ByName  for libraries that insist on opening a file by name themselves: the temporary
 //                 file is created (empty, reserving its unique name) and closed; hand
 //                 temporary_path() to the library, let it write (it may truncate, rewrite or

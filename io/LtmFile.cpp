@@ -3,20 +3,21 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
+#include <zip.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <new>
 #include <stdexcept>
 #include <vector>
 
+#include "io/Npy.h"
 #include "io/Npz.h"
 
 namespace ltm {
@@ -45,14 +46,12 @@ void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOp
 }
 
 // ---------------------------------------------------------------------------------------------
-// Reading: a ZIP reader and .npy parser for what scipy and numpy write
+// Reading: libzip opens the archive and inflates the entries (checking sizes and CRC-32s); each
+// entry is parsed as a .npy stream (io/Npy.h) and converted as it arrives
 // ---------------------------------------------------------------------------------------------
 
 namespace {
 
-constexpr std::uint32_t kSigLocal = 0x04034b50, kSigCentral = 0x02014b50, kSigEnd = 0x06054b50,
-                        kSigEnd64 = 0x06064b50, kSigLocator64 = 0x07064b50;
-constexpr std::uint64_t k32 = 0xFFFFFFFFull;  // a 32-bit field with this value defers to ZIP64
 constexpr std::size_t kChunk = std::size_t(1) << 20;
 
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
@@ -60,18 +59,6 @@ constexpr bool kHostLittle = true;
 #else
 constexpr bool kHostLittle = false;
 #endif
-
-std::string errno_text(int e) { return std::strerror(e); }
-
-std::uint16_t get16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
-std::uint32_t get32(const std::uint8_t* p) {
-    return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
-           (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
-}
-std::uint64_t get64(const std::uint8_t* p) {
-    return static_cast<std::uint64_t>(get32(p)) | (static_cast<std::uint64_t>(get32(p + 4)) << 32);
-}
-
 
 struct ReadError : std::runtime_error {
     using std::runtime_error::runtime_error;
@@ -84,371 +71,167 @@ std::string hex32(std::uint32_t v) {
     return b;
 }
 
-class InFile {
-public:
-    explicit InFile(const std::string& path) {
-        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd_ < 0) {
-            const int e = errno;
-            if (e == ENOENT) bad("no such file");
-            bad("cannot open it: " + errno_text(e));
-        }
-        struct stat st {};
-        if (::fstat(fd_, &st) != 0) bad("cannot stat it: " + errno_text(errno));
-        if (S_ISDIR(st.st_mode)) bad("it is a folder");
-        if (!S_ISREG(st.st_mode)) bad("it is not a regular file");
-        size_ = static_cast<std::uint64_t>(st.st_size);
-    }
-    ~InFile() {
-        if (fd_ >= 0) ::close(fd_);
-    }
-    InFile(const InFile&) = delete;
-    InFile& operator=(const InFile&) = delete;
-    std::uint64_t size() const { return size_; }
-    void read_at(std::uint64_t offset, void* buf, std::size_t n, const std::string& what) const {
-        if (offset > size_ || n > size_ - offset)
-            bad("truncated or corrupt archive: " + what + " (bytes " + std::to_string(offset) + ".." +
-                std::to_string(offset + n) + ") extends past the end of the file (" + std::to_string(size_) +
-                " bytes)");
-        auto* p = static_cast<char*>(buf);
-        while (n > 0) {
-            const ssize_t r = ::pread(fd_, p, std::min<std::size_t>(n, std::size_t(1) << 30), static_cast<off_t>(offset));
-            if (r < 0) {
-                if (errno == EINTR) continue;
-                bad("reading " + what + " failed: " + errno_text(errno));
-            }
-            if (r == 0) bad("unexpected end of file while reading " + what);
-            p += r;
-            n -= static_cast<std::size_t>(r);
-            offset += static_cast<std::uint64_t>(r);
-        }
-    }
+std::string libzip_text(const zip_error_t* e) {
+    return std::string("libzip: ") + zip_error_strerror(const_cast<zip_error_t*>(e));
+}
+std::string libzip_text(int code) {
+    zip_error_t e;
+    zip_error_init_with_code(&e, code);
+    std::string s = libzip_text(&e);
+    zip_error_fini(&e);
+    return s;
+}
 
-private:
-    int fd_ = -1;
-    std::uint64_t size_ = 0;
-};
-
-struct CdEntry {
-    std::string name;
-    std::uint16_t flags = 0, method = 0;
-    std::uint32_t crc = 0;
-    std::uint64_t csize = 0, usize = 0, offset = 0;
-};
-
-std::vector<CdEntry> read_central_directory(const InFile& f) {
-    const std::uint64_t size = f.size();
-    if (size == 0) bad("the file is empty");
-    std::uint8_t head[8] = {};
-    f.read_at(0, head, static_cast<std::size_t>(std::min<std::uint64_t>(size, 8)), "the first bytes");
-    const bool starts_zip = size >= 4 && get32(head) == kSigLocal;
-    if (size >= 6 && std::memcmp(head, "\x93NUMPY", 6) == 0)
+// What the file is, before libzip looks at it: the errors of a path that is no ZIP at all.
+// Returns whether it begins like a ZIP archive (a local file header).
+bool inspect_file(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        const int e = errno;
+        if (e == ENOENT) bad("no such file");
+        bad(std::string("cannot open it: ") + std::strerror(e));
+    }
+    struct stat st {};
+    const int r = ::fstat(fd, &st);
+    const int e = errno;
+    unsigned char head[8] = {};
+    const ssize_t n = r == 0 && S_ISREG(st.st_mode) ? ::pread(fd, head, sizeof head, 0) : 0;
+    ::close(fd);
+    if (r != 0) bad(std::string("cannot stat it: ") + std::strerror(e));
+    if (S_ISDIR(st.st_mode)) bad("it is a folder");
+    if (!S_ISREG(st.st_mode)) bad("it is not a regular file");
+    if (st.st_size == 0) bad("the file is empty");
+    if (n >= 6 && std::memcmp(head, "\x93NUMPY", 6) == 0)
         bad("it is a single .npy array, not an .npz archive (a ZIP of .npy arrays)");
-    if (size < 22) bad(starts_zip ? "truncated ZIP archive (" + std::to_string(size) + " bytes)"
-                                  : "not a ZIP archive (only " + std::to_string(size) + " bytes)");
-
-    const std::size_t tail_n = static_cast<std::size_t>(std::min<std::uint64_t>(size, 22 + 65535));
-    std::vector<std::uint8_t> tail(tail_n);
-    f.read_at(size - tail_n, tail.data(), tail_n, "the end of the archive");
-    std::ptrdiff_t found = -1;
-    for (std::ptrdiff_t i = static_cast<std::ptrdiff_t>(tail_n) - 22; i >= 0; --i) {
-        if (get32(&tail[static_cast<std::size_t>(i)]) == kSigEnd &&
-            static_cast<std::size_t>(i) + 22 + get16(&tail[static_cast<std::size_t>(i) + 20]) <= tail_n) {
-            found = i;
-            break;
-        }
-    }
-    if (found < 0)
-        bad(starts_zip ? "truncated or corrupt ZIP archive (no end-of-central-directory record)"
-                       : "not a ZIP archive (no end-of-central-directory record)");
-    const std::uint8_t* eocd = &tail[static_cast<std::size_t>(found)];
-    const std::uint64_t eocd_pos = size - tail_n + static_cast<std::uint64_t>(found);
-    std::uint64_t disk = get16(eocd + 4), cd_disk = get16(eocd + 6), n = get16(eocd + 10),
-                  cd_size = get32(eocd + 12), cd_offset = get32(eocd + 16);
-    std::uint64_t cd_end_limit = eocd_pos;
-    if (eocd_pos >= 20) {
-        std::uint8_t loc[20];
-        f.read_at(eocd_pos - 20, loc, 20, "the ZIP64 locator");
-        if (get32(loc) == kSigLocator64) {
-            const std::uint64_t rec_pos = get64(loc + 8);
-            if (get32(loc + 16) > 1) bad("multi-disk ZIP archives are not supported");
-            std::uint8_t rec[56];
-            f.read_at(rec_pos, rec, 56, "the ZIP64 end-of-central-directory record");
-            if (get32(rec) != kSigEnd64) bad("corrupt ZIP archive: bad ZIP64 end-of-central-directory record");
-            disk = get32(rec + 16);
-            cd_disk = get32(rec + 20);
-            n = get64(rec + 32);
-            cd_size = get64(rec + 40);
-            cd_offset = get64(rec + 48);
-            cd_end_limit = rec_pos;
-        }
-    }
-    // Without a ZIP64 record the 16/32-bit values are taken literally, as Python does.
-    if (disk != 0 || cd_disk != 0) bad("multi-disk ZIP archives are not supported");
-    if (cd_offset > cd_end_limit || cd_size > cd_end_limit - cd_offset)
-        bad("truncated or corrupt ZIP archive: the central directory (" + std::to_string(cd_size) + " bytes at " +
-            std::to_string(cd_offset) + ") does not lie before its end record");
-    if (n > cd_size / 46) bad("corrupt ZIP archive: " + std::to_string(n) + " entries cannot fit the central directory");
-
-    std::vector<std::uint8_t> cd(static_cast<std::size_t>(cd_size));
-    f.read_at(cd_offset, cd.data(), cd.size(), "the central directory");
-    std::vector<CdEntry> entries;
-    std::size_t pos = 0;
-    for (std::uint64_t k = 0; k < n; ++k) {
-        if (pos + 46 > cd.size() || get32(&cd[pos]) != kSigCentral)
-            bad("corrupt ZIP archive: bad central directory entry " + std::to_string(k));
-        const std::uint8_t* h = &cd[pos];
-        CdEntry e;
-        e.flags = get16(h + 8);
-        e.method = get16(h + 10);
-        e.crc = get32(h + 16);
-        e.csize = get32(h + 20);
-        e.usize = get32(h + 24);
-        const std::size_t nlen = get16(h + 28), xlen = get16(h + 30), clen = get16(h + 32);
-        e.offset = get32(h + 42);
-        if (pos + 46 + nlen + xlen + clen > cd.size())
-            bad("corrupt ZIP archive: central directory entry " + std::to_string(k) + " overruns the directory");
-        e.name.assign(reinterpret_cast<const char*>(h + 46), nlen);
-        const std::uint8_t* x = h + 46 + nlen;
-        for (std::size_t xp = 0; xp + 4 <= xlen;) {
-            const std::uint16_t id = get16(x + xp), len = get16(x + xp + 2);
-            if (xp + 4 + len > xlen) bad("corrupt ZIP archive: bad extra field in entry '" + e.name + "'");
-            if (id == 0x0001) {  // ZIP64: the deferred fields, in order
-                std::size_t q = xp + 4;
-                const std::size_t qend = xp + 4 + len;
-                auto take = [&](std::uint64_t& field) {
-                    if (q + 8 > qend) bad("corrupt ZIP archive: short ZIP64 field in entry '" + e.name + "'");
-                    field = get64(x + q);
-                    q += 8;
-                };
-                if (e.usize == k32) take(e.usize);
-                if (e.csize == k32) take(e.csize);
-                if (e.offset == k32) take(e.offset);
-            }
-            xp += 4 + len;
-        }
-        entries.push_back(e);
-        pos += 46 + nlen + xlen + clen;
-    }
-    return entries;
+    return n >= 4 && std::memcmp(head, "PK\x03\x04", 4) == 0;
 }
 
-struct Inflater {
-    z_stream zs{};
-    bool live = false;
-    ~Inflater() {
-        if (live) inflateEnd(&zs);
-    }
-};
-
-// Streams the uncompressed bytes of an entry to `sink`, verifying its size and CRC-32.
-void extract(const InFile& f, const CdEntry& e, const std::function<void(const std::uint8_t*, std::size_t)>& sink) {
-    const std::string what = "entry '" + e.name + "'";
-    if (e.flags & 0x0001) bad(what + " is encrypted");
-    if (e.method != 0 && e.method != 8)
-        bad(what + " uses compression method " + std::to_string(e.method) + " (only stored and deflate are supported)");
-    std::uint8_t lh[30];
-    f.read_at(e.offset, lh, 30, "the local header of " + what);
-    if (get32(lh) != kSigLocal) bad("corrupt ZIP archive: bad local header of " + what);
-    const std::size_t nlen = get16(lh + 26), xlen = get16(lh + 28);
-    std::string lname(nlen, '\0');
-    f.read_at(e.offset + 30, lname.data(), nlen, "the local header of " + what);
-    if (lname != e.name)
-        bad("corrupt ZIP archive: the local header of " + what + " names '" + lname + "'");
-    const std::uint64_t data_pos = e.offset + 30 + nlen + xlen;
-    if (data_pos > f.size() || e.csize > f.size() - data_pos)
-        bad("truncated or corrupt archive: the data of " + what + " (" + std::to_string(e.csize) + " bytes at " +
-            std::to_string(data_pos) + ") extends past the end of the file (" + std::to_string(f.size()) + " bytes)");
-    if (e.method == 0 && e.csize != e.usize)
-        bad("corrupt ZIP archive: stored " + what + " has compressed size " + std::to_string(e.csize) +
-            " != size " + std::to_string(e.usize));
-    if (e.method == 8 && e.usize > e.csize * 1032 + 1024)  // deflate expands at most 1032:1
-        bad("corrupt ZIP archive: " + what + " claims " + std::to_string(e.usize) + " bytes from " +
-            std::to_string(e.csize) + " compressed bytes");
-
-    uLong crc = crc32(0L, Z_NULL, 0);
-    std::uint64_t produced = 0;
-    std::vector<std::uint8_t> in(kChunk);
-    auto deliver = [&](const std::uint8_t* p, std::size_t n) {
-        produced += n;
-        if (produced > e.usize)
-            bad("corrupt ZIP archive: " + what + " holds more than its recorded " + std::to_string(e.usize) + " bytes");
-        crc = crc32_z(crc, p, n);
-        sink(p, n);
-    };
-    if (e.method == 0) {
-        for (std::uint64_t done = 0; done < e.csize;) {
-            const std::size_t m = static_cast<std::size_t>(std::min<std::uint64_t>(in.size(), e.csize - done));
-            f.read_at(data_pos + done, in.data(), m, "the data of " + what);
-            deliver(in.data(), m);
-            done += m;
-        }
-    } else {
-        Inflater inf;
-        if (inflateInit2(&inf.zs, -15) != Z_OK) bad("zlib's inflateInit2 failed");
-        inf.live = true;
-        std::vector<std::uint8_t> out(kChunk);
-        std::uint64_t read = 0;
-        int ret = Z_OK;
-        while (ret != Z_STREAM_END) {
-            if (inf.zs.avail_in == 0) {
-                if (read == e.csize) bad("corrupt ZIP archive: the deflate stream of " + what + " ends early");
-                const std::size_t m = static_cast<std::size_t>(std::min<std::uint64_t>(in.size(), e.csize - read));
-                f.read_at(data_pos + read, in.data(), m, "the data of " + what);
-                read += m;
-                inf.zs.next_in = in.data();
-                inf.zs.avail_in = static_cast<uInt>(m);
-            }
-            inf.zs.next_out = out.data();
-            inf.zs.avail_out = static_cast<uInt>(out.size());
-            ret = inflate(&inf.zs, Z_NO_FLUSH);
-            if (ret == Z_DATA_ERROR || ret == Z_NEED_DICT || ret == Z_MEM_ERROR || ret == Z_STREAM_ERROR)
-                bad("corrupt ZIP archive: bad deflate data in " + what + " (zlib: " +
-                    (inf.zs.msg ? inf.zs.msg : std::to_string(ret)) + ")");
-            const std::size_t have = out.size() - inf.zs.avail_out;
-            if (have > 0) deliver(out.data(), have);
-        }
-    }
-    if (produced != e.usize)
-        bad("corrupt ZIP archive: " + what + " holds " + std::to_string(produced) + " bytes, its header says " +
-            std::to_string(e.usize));
-    if (static_cast<std::uint32_t>(crc) != e.crc)
-        bad("CRC-32 mismatch in " + what + " (recorded " + hex32(e.crc) + ", computed " +
-            hex32(static_cast<std::uint32_t>(crc)) + "): the file is corrupt");
-}
-
-// ----- .npy parsing -----
-
-struct NpyInfo {
-    std::string descr;
-    bool big_endian = false;
-    char kind = '?';
-    std::size_t itemsize = 0;  // bytes per element
-    std::vector<std::int64_t> shape;
-    std::uint64_t count = 1;
-};
-
-class HeaderParser {
+// The archive, open in libzip (read-only; its names listed once).
+class Archive {
 public:
-    HeaderParser(const std::string& text, const std::string& entry) : s_(text), entry_(entry) {}
-
-    NpyInfo parse() {
-        NpyInfo info;
-        bool have_descr = false, have_order = false, have_shape = false;
-        ws();
-        expect('{');
-        for (;;) {
-            ws();
-            if (peek() == '}') break;
-            const std::string key = string();
-            ws();
-            expect(':');
-            ws();
-            if (key == "descr") {
-                if (peek() == '[') fail("structured dtypes are not supported");
-                info.descr = string();
-                have_descr = true;
-            } else if (key == "fortran_order") {
-                word();
-                have_order = true;
-            } else if (key == "shape") {
-                info.shape = tuple();
-                have_shape = true;
-            } else {
-                fail("unexpected key '" + key + "'");
+    explicit Archive(const std::string& path) {
+        const bool starts_zip = inspect_file(path);
+        int code = 0;
+        za_ = zip_open(path.c_str(), ZIP_RDONLY, &code);
+        if (!za_) {
+            const std::string why = libzip_text(code);
+            switch (code) {
+                case ZIP_ER_NOZIP:
+                    bad(starts_zip ? "truncated or corrupt ZIP archive (no end-of-central-directory record; " + why + ")"
+                                   : "not a ZIP archive (" + why + ")");
+                case ZIP_ER_INCONS:
+                case ZIP_ER_EOF:
+                case ZIP_ER_READ:
+                case ZIP_ER_SEEK: bad("truncated or corrupt ZIP archive (" + why + ")");
+                case ZIP_ER_MULTIDISK: bad("multi-disk ZIP archives are not supported (" + why + ")");
+                case ZIP_ER_MEMORY: throw std::bad_alloc();
+                default: bad("cannot open it as a ZIP archive (" + why + ")");
             }
-            ws();
-            if (peek() == ',') {
-                ++i_;
-                continue;
-            }
-            ws();
-            if (peek() != '}') fail("expected ',' or '}'");
         }
-        if (!have_descr || !have_order || !have_shape) fail("the header lacks 'descr', 'fortran_order' or 'shape'");
-        return info;
+        const zip_int64_t n = zip_get_num_entries(za_, 0);
+        for (zip_int64_t i = 0; i < n; ++i) {
+            const char* name = zip_get_name(za_, static_cast<zip_uint64_t>(i), ZIP_FL_ENC_RAW);
+            if (!name) bad("corrupt ZIP archive: entry " + std::to_string(i) + " has no name (" +
+                           libzip_text(zip_get_error(za_)) + ")");
+            names_.emplace_back(name);
+        }
     }
+    ~Archive() { zip_discard(za_); }
+    Archive(const Archive&) = delete;
+    Archive& operator=(const Archive&) = delete;
+
+    // The index of entry `name`; errors when it is missing (naming what there is) or appears twice.
+    zip_uint64_t find(const std::string& name) const {
+        std::size_t found = names_.size();
+        for (std::size_t i = 0; i < names_.size(); ++i) {
+            if (names_[i] != name) continue;
+            if (found != names_.size()) bad("corrupt archive: it holds two entries named '" + name + "'");
+            found = i;
+        }
+        if (found == names_.size()) {
+            std::string list;
+            for (const std::string& n : names_) list += (list.empty() ? "" : ", ") + n;
+            bad("missing array '" + name + "': not a scipy.sparse CSR matrix file (the archive holds " +
+                (list.empty() ? "no entries" : list) + ")");
+        }
+        return found;
+    }
+
+    // The entry's size (after inflating) and checks of what libzip would otherwise accept.
+    zip_uint64_t check_entry(zip_uint64_t index) const {
+        const std::string what = "entry '" + names_[index] + "'";
+        zip_stat_t st;
+        zip_stat_init(&st);
+        if (zip_stat_index(za_, index, 0, &st) != 0)
+            bad("corrupt ZIP archive: " + what + " (" + libzip_text(zip_get_error(za_)) + ")");
+        const zip_uint64_t need = ZIP_STAT_SIZE | ZIP_STAT_COMP_SIZE | ZIP_STAT_COMP_METHOD | ZIP_STAT_CRC;
+        if ((st.valid & need) != need) bad("corrupt ZIP archive: " + what + " lacks its sizes or CRC-32");
+        if ((st.valid & ZIP_STAT_ENCRYPTION_METHOD) && st.encryption_method != ZIP_EM_NONE) bad(what + " is encrypted");
+        if (st.comp_method != ZIP_CM_STORE && st.comp_method != ZIP_CM_DEFLATE)
+            bad(what + " uses compression method " + std::to_string(st.comp_method) +
+                " (only stored and deflate are supported)");
+        if (st.comp_method == ZIP_CM_STORE && st.comp_size != st.size)
+            bad("corrupt ZIP archive: stored " + what + " has compressed size " + std::to_string(st.comp_size) +
+                " != size " + std::to_string(st.size));
+        if (st.comp_method == ZIP_CM_DEFLATE && st.size > st.comp_size * 1032 + 1024)  // deflate expands at most 1032:1
+            bad("corrupt ZIP archive: " + what + " claims " + std::to_string(st.size) + " bytes from " +
+                std::to_string(st.comp_size) + " compressed bytes");
+        crc_ = st.crc;
+        return st.size;
+    }
+
+    // Streams the uncompressed bytes of an entry to `sink`; libzip verifies its size and CRC-32.
+    void extract(zip_uint64_t index, const std::function<void(const std::uint8_t*, std::size_t)>& sink) const {
+        const std::string what = "entry '" + names_[index] + "'";
+        const zip_uint64_t size = check_entry(index);
+        zip_file_t* f = zip_fopen_index(za_, index, 0);
+        if (!f) entry_error(what, zip_get_error(za_));
+        std::unique_ptr<zip_file_t, int (*)(zip_file_t*)> close(f, zip_fclose);
+        std::vector<std::uint8_t> buf(static_cast<std::size_t>(std::min<zip_uint64_t>(kChunk, size + 1)));
+        zip_uint64_t produced = 0;
+        for (;;) {
+            const zip_int64_t n = zip_fread(f, buf.data(), buf.size());
+            if (n < 0) entry_error(what, zip_file_get_error(f));
+            if (n == 0) break;
+            produced += static_cast<zip_uint64_t>(n);
+            if (produced > size)
+                bad("corrupt ZIP archive: " + what + " holds more than its recorded " + std::to_string(size) + " bytes");
+            sink(buf.data(), static_cast<std::size_t>(n));
+        }
+        if (produced != size)
+            bad("corrupt ZIP archive: " + what + " holds " + std::to_string(produced) + " bytes, its header says " +
+                std::to_string(size));
+    }
+
+    const std::string& name(zip_uint64_t index) const { return names_[index]; }
 
 private:
-    [[noreturn]] void fail(const std::string& why) {
-        bad("corrupt array " + entry_ + ": bad .npy header (" + why + "): " + s_.substr(0, 200));
-    }
-    char peek() const { return i_ < s_.size() ? s_[i_] : '\0'; }
-    void ws() {
-        while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
-    }
-    void expect(char c) {
-        if (peek() != c) fail(std::string("expected '") + c + "'");
-        ++i_;
-    }
-    std::string string() {
-        const char q = peek();
-        if (q != '\'' && q != '"') fail("expected a string");
-        ++i_;
-        const std::size_t b = i_;
-        while (i_ < s_.size() && s_[i_] != q) ++i_;
-        if (i_ >= s_.size()) fail("unterminated string");
-        return s_.substr(b, i_++ - b);
-    }
-    std::string word() {
-        const std::size_t b = i_;
-        while (i_ < s_.size() && std::isalpha(static_cast<unsigned char>(s_[i_]))) ++i_;
-        const std::string w = s_.substr(b, i_ - b);
-        if (w != "True" && w != "False") fail("expected True or False");
-        return w;
-    }
-    std::vector<std::int64_t> tuple() {
-        std::vector<std::int64_t> v;
-        expect('(');
-        for (;;) {
-            ws();
-            if (peek() == ')') break;
-            if (!std::isdigit(static_cast<unsigned char>(peek()))) fail("expected a non-negative integer in the shape");
-            std::int64_t x = 0;
-            while (std::isdigit(static_cast<unsigned char>(peek()))) {
-                if (x > (std::numeric_limits<std::int64_t>::max() - 9) / 10) fail("shape entry too large");
-                x = x * 10 + (s_[i_++] - '0');
-            }
-            if (peek() == 'L') ++i_;  // Python 2 long literal
-            v.push_back(x);
-            ws();
-            if (peek() == ',') {
-                ++i_;
-                continue;
-            }
-            ws();
-            if (peek() != ')') fail("expected ',' or ')' in the shape");
+    // libzip's error while reading an entry, in the words of io/LtmFile.h.
+    [[noreturn]] void entry_error(const std::string& what, const zip_error_t* e) const {
+        const std::string why = libzip_text(e);
+        switch (zip_error_code_zip(e)) {
+            case ZIP_ER_CRC:
+                bad("CRC-32 mismatch in " + what + " (recorded " + hex32(crc_) + "; " + why + "): the file is corrupt");
+            case ZIP_ER_COMPRESSED_DATA:
+            case ZIP_ER_ZLIB: bad("corrupt ZIP archive: bad deflate data in " + what + " (" + why + ")");
+            case ZIP_ER_ENCRNOTSUPP:
+            case ZIP_ER_NOPASSWD:
+            case ZIP_ER_WRONGPASSWD: bad(what + " is encrypted (" + why + ")");
+            case ZIP_ER_COMPNOTSUPP: bad(what + " uses an unsupported compression method (" + why + ")");
+            case ZIP_ER_MEMORY: throw std::bad_alloc();
+            default: bad("truncated or corrupt archive: cannot read " + what + " (" + why + ")");
         }
-        ++i_;
-        return v;
     }
 
-    std::string s_;
-    std::string entry_;
-    std::size_t i_ = 0;
+    zip_t* za_ = nullptr;
+    std::vector<std::string> names_;
+    mutable std::uint32_t crc_ = 0;  // of the entry being read (for messages)
 };
-
-void parse_descr(NpyInfo& info, const std::string& entry) {
-    const std::string& d = info.descr;
-    auto fail = [&] { bad("array " + entry + " has the unsupported dtype '" + d + "'"); };
-    if (d.size() < 3) fail();
-    const char order = d[0];
-    if (order != '<' && order != '>' && order != '|' && order != '=') fail();
-    info.big_endian = order == '>' || (order == '=' && !kHostLittle);
-    info.kind = d[1];
-    std::size_t n = 0;
-    for (std::size_t i = 2; i < d.size(); ++i) {
-        if (!std::isdigit(static_cast<unsigned char>(d[i])) || n > 1000000) fail();
-        n = n * 10 + static_cast<std::size_t>(d[i] - '0');
-    }
-    if (n == 0) fail();
-    info.itemsize = info.kind == 'U' ? 4 * n : n;
-}
 
 // Consumes the bytes of one .npy entry: the header, then whole elements passed to on_elements.
 class NpyStream {
 public:
-    using OnHeader = std::function<void(NpyInfo&)>;
+    using OnHeader = std::function<void(io::NpyHeader&)>;
     using OnElements = std::function<void(const std::uint8_t*, std::size_t count)>;
 
     NpyStream(std::string entry, std::uint64_t entry_size, OnHeader on_header, OnElements on_elements)
@@ -457,12 +240,11 @@ public:
 
     void feed(const std::uint8_t* p, std::size_t n) {
         while (!have_header_ && n > 0) {
-            const std::size_t want = target();
-            const std::size_t m = std::min(n, want - head_.size());
+            const std::size_t m = std::min(n, want_ - head_.size());
             head_.append(reinterpret_cast<const char*>(p), m);
             p += m;
             n -= m;
-            if (head_.size() == want) advance();
+            if (head_.size() == want_) advance();
         }
         if (n > 0) payload(p, n);
     }
@@ -475,41 +257,20 @@ public:
     }
 
 private:
-    // How many bytes of the preamble to gather next: the magic and version (8), then the header
-    // length field (to byte 10 in version 1, 12 in versions 2 and 3), then the whole header.
-    std::size_t target() const { return prefix_ == 0 ? 8 : header_total_ == 0 ? prefix_ : header_total_; }
-
+    // The preamble is gathered in steps (io::npy_preamble_size): magic and version, the header
+    // length, then the whole header, which is parsed.
     void advance() {
-        const auto* u = reinterpret_cast<const std::uint8_t*>(head_.data());
-        if (prefix_ == 0) {
-            if (std::memcmp(u, "\x93NUMPY", 6) != 0) bad("array " + entry_ + " is not a .npy array (bad magic)");
-            if (u[6] == 1)
-                prefix_ = 10;
-            else if (u[6] == 2 || u[6] == 3)
-                prefix_ = 12;
-            else
-                bad("array " + entry_ + " has the unsupported .npy version " + std::to_string(u[6]) + "." +
-                    std::to_string(u[7]));
-        } else if (header_total_ == 0) {
-            const std::size_t len = prefix_ == 10 ? get16(u + 8) : get32(u + 8);
-            if (len == 0 || len > (std::size_t(1) << 24))
-                bad("array " + entry_ + " has an implausible .npy header length " + std::to_string(len));
-            header_total_ = prefix_ + len;
-        } else {
-            parse_header();
+        try {
+            const std::size_t want = io::npy_preamble_size(head_);
+            if (want != want_) {
+                want_ = want;
+                return;
+            }
+            info_ = io::parse_npy_preamble(head_);
+        } catch (const io::NpyError& e) {
+            bad("corrupt array " + entry_ + ": " + e.what());
         }
-    }
-
-    void parse_header() {
-        info_ = HeaderParser(head_.substr(prefix_), entry_).parse();
-        parse_descr(info_, entry_);
-        info_.count = 1;
-        for (std::int64_t s : info_.shape) {
-            if (s != 0 && info_.count > std::numeric_limits<std::uint64_t>::max() / static_cast<std::uint64_t>(s))
-                bad("array " + entry_ + " has an implausible shape");
-            info_.count *= static_cast<std::uint64_t>(s);
-        }
-        const std::uint64_t payload = entry_size_ - std::min<std::uint64_t>(entry_size_, header_total_);
+        const std::uint64_t payload = entry_size_ - std::min<std::uint64_t>(entry_size_, info_.preamble_size);
         if (info_.count > payload / info_.itemsize || info_.count * info_.itemsize != payload)
             bad("array " + entry_ + " is corrupt: its header describes " + std::to_string(info_.count) +
                 " elements of " + std::to_string(info_.itemsize) + " bytes, but it holds " + std::to_string(payload) +
@@ -545,9 +306,9 @@ private:
     OnHeader on_header_;
     OnElements on_elements_;
     std::string head_;
-    std::size_t prefix_ = 0, header_total_ = 0;
+    std::size_t want_ = io::npy_preamble_size({});
     bool have_header_ = false;
-    NpyInfo info_;
+    io::NpyHeader info_;
     std::vector<std::uint8_t> carry_;
     std::uint64_t done_ = 0;
 };
@@ -579,51 +340,31 @@ double load_float(const std::uint8_t* p, std::size_t size, bool big) {
     return d;
 }
 
-std::string list_names(const std::vector<CdEntry>& entries) {
-    if (entries.empty()) return "no entries";
-    std::string s;
-    for (const CdEntry& e : entries) s += (s.empty() ? "" : ", ") + e.name;
-    return s;
-}
-
-const CdEntry& find_entry(const std::vector<CdEntry>& entries, const std::string& name) {
-    const CdEntry* found = nullptr;
-    for (const CdEntry& e : entries) {
-        if (e.name != name) continue;
-        if (found) bad("corrupt archive: it holds two entries named '" + name + "'");
-        found = &e;
-    }
-    if (!found)
-        bad("missing array '" + name + "': not a scipy.sparse CSR matrix file (the archive holds " +
-            list_names(entries) + ")");
-    return *found;
-}
-
 // Reads one array entry; `on_header` validates dtype and shape (throwing), `on_elements` converts.
-void read_array(const InFile& f, const CdEntry& e, const NpyStream::OnHeader& on_header,
+void read_array(const Archive& zip, const std::string& name, const NpyStream::OnHeader& on_header,
                 const NpyStream::OnElements& on_elements) {
-    NpyStream npy("'" + e.name + "'", e.usize, on_header, on_elements);
-    extract(f, e, [&](const std::uint8_t* p, std::size_t n) { npy.feed(p, n); });
+    const zip_uint64_t index = zip.find(name);
+    NpyStream npy("'" + name + "'", zip.check_entry(index), on_header, on_elements);
+    zip.extract(index, [&](const std::uint8_t* p, std::size_t n) { npy.feed(p, n); });
     npy.finish();
 }
 
-void require_1d(const NpyInfo& info, const std::string& name) {
+void require_1d(const io::NpyHeader& info, const std::string& name) {
     if (info.shape.size() != 1)
         bad("bad shape of array '" + name + "': it has " + std::to_string(info.shape.size()) +
             " dimensions, expected 1");
 }
 
-CsrMatrix read_npz(const InFile& f) {
-    const std::vector<CdEntry> entries = read_central_directory(f);
+CsrMatrix read_npz(const Archive& zip) {
     CsrMatrix T;
 
     // format: a bytes or str scalar "csr"
     std::string format;
     {
-        NpyInfo fi;
+        io::NpyHeader fi;
         read_array(
-            f, find_entry(entries, "format.npy"),
-            [&](NpyInfo& info) {
+            zip, "format.npy",
+            [&](io::NpyHeader& info) {
                 if ((info.kind != 'S' && info.kind != 'U') || info.count != 1)
                     bad("array 'format.npy' should be a string scalar such as b'csr', but has dtype '" + info.descr +
                         "' and " + std::to_string(info.count) + " elements");
@@ -643,18 +384,18 @@ CsrMatrix read_npz(const InFile& f) {
     }
     if (format != "csr") bad("it holds a sparse matrix in format '" + format + "', not a CSR matrix");
 
-    for (const char* name : {"shape.npy", "indptr.npy", "indices.npy", "data.npy"}) find_entry(entries, name);
+    for (const char* name : {"shape.npy", "indptr.npy", "indices.npy", "data.npy"}) zip.find(name);
 
     // shape: two non-negative integers
     std::vector<std::int64_t> shape;
     {
-        NpyInfo si;
+        io::NpyHeader si;
         read_array(
-            f, find_entry(entries, "shape.npy"),
-            [&](NpyInfo& info) {
+            zip, "shape.npy",
+            [&](io::NpyHeader& info) {
                 if ((info.kind != 'i' && info.kind != 'u') || (info.itemsize != 4 && info.itemsize != 8))
                     bad("bad dtype '" + info.descr + "' of array 'shape.npy' (expected int64 or int32)");
-                if (info.shape != std::vector<std::int64_t>{2})
+                if (info.shape != std::vector<std::uint64_t>{2})
                     bad("bad shape of array 'shape.npy': expected (2,), a matrix shape");
                 si = info;
             },
@@ -675,10 +416,10 @@ CsrMatrix read_npz(const InFile& f) {
 
     // indptr: rows + 1 integers
     {
-        NpyInfo ii;
+        io::NpyHeader ii;
         read_array(
-            f, find_entry(entries, "indptr.npy"),
-            [&](NpyInfo& info) {
+            zip, "indptr.npy",
+            [&](io::NpyHeader& info) {
                 if (info.kind != 'i' || (info.itemsize != 4 && info.itemsize != 8))
                     bad("bad dtype '" + info.descr + "' of array 'indptr.npy' (expected int32 or int64)");
                 require_1d(info, "indptr.npy");
@@ -696,10 +437,10 @@ CsrMatrix read_npz(const InFile& f) {
 
     // indices: int32, converted from int64 when they fit
     {
-        NpyInfo ii;
+        io::NpyHeader ii;
         read_array(
-            f, find_entry(entries, "indices.npy"),
-            [&](NpyInfo& info) {
+            zip, "indices.npy",
+            [&](io::NpyHeader& info) {
                 if (info.kind != 'i' || (info.itemsize != 4 && info.itemsize != 8))
                     bad("bad dtype '" + info.descr + "' of array 'indices.npy' (expected int32 or int64)");
                 require_1d(info, "indices.npy");
@@ -725,10 +466,10 @@ CsrMatrix read_npz(const InFile& f) {
 
     // data: float32, converted from float64
     {
-        NpyInfo di;
+        io::NpyHeader di;
         read_array(
-            f, find_entry(entries, "data.npy"),
-            [&](NpyInfo& info) {
+            zip, "data.npy",
+            [&](io::NpyHeader& info) {
                 if (info.kind != 'f' || (info.itemsize != 4 && info.itemsize != 8))
                     bad("bad dtype '" + info.descr + "' of array 'data.npy' (expected float32 or float64)");
                 require_1d(info, "data.npy");
@@ -765,8 +506,8 @@ CsrMatrix read_npz(const InFile& f) {
 
 CsrMatrix read_ltm_npz(const std::string& path) {
     try {
-        InFile f(path);
-        return read_npz(f);
+        const Archive zip(path);
+        return read_npz(zip);
     } catch (const ReadError& e) {
         throw std::runtime_error("cannot read LTM file '" + path + "': " + e.what());
     } catch (const std::bad_alloc&) {

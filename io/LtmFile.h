@@ -11,29 +11,40 @@
 //     format.npy   '|S3', shape ()          b'csr'
 //     shape.npy    '<i8', shape (2,)        (rows, cols)
 //     data.npy     '<f4', shape (nnz,)      value of each nonzero
-//   Each entry is deflate-compressed (ZIP method 8, raw zlib stream, level 6 by default, as
-//   numpy.savez_compressed does) with its zlib CRC-32, a fixed timestamp (1980-01-01 00:00) and
-//   no extra attributes. Each .npy is format version 1.0: "\x93NUMPY" 1 0, a little-endian uint16
-//   header length, and the header "{'descr': '<f4', 'fortran_order': False, 'shape': (N,), }"
-//   padded with spaces and ended by '\n' so that the preamble is a multiple of 64 bytes (as numpy
-//   pads it); the little-endian array data follows.
-//   ZIP64: an entry whose size (or worst-case compressed size, zlib's deflateBound) reaches
-//   0xFFFFFFFF bytes gets ZIP64 size fields in its local and central headers; an entry starting
-//   at or beyond 4 GiB gets a ZIP64 offset; an archive whose central directory lies beyond 4 GiB
-//   (or with 65535 entries or more) ends with a ZIP64 end-of-central-directory record and
-//   locator. So files above 4 GiB are written in full (APPNOTE 6.3, as Python's zipfile reads).
-//   NpzWriteOptions::force_zip64 writes every ZIP64 field even for small files (used by tests).
+//   Each entry is deflate-compressed by libzip (ZIP method 8, raw deflate stream; level 6 by
+//   default, see below; level 0 stores, ZIP method 0) with its CRC-32, a fixed timestamp
+//   (1980-01-01 00:00) and no extra fields. Each .npy is format version 1.0 (io/Npy.h):
+//   "\x93NUMPY" 1 0, a little-endian uint16 header length, and the header
+//   "{'descr': '<f4', 'fortran_order': False, 'shape': (N,), }" padded with spaces and ended by
+//   '\n' so that the preamble is a multiple of 64 bytes (as numpy pads it); the little-endian array
+//   data follows.
+//   ZIP64 where libzip needs it (io/Npz.h): sizes, offsets or the central directory beyond 4 GiB
+//   get ZIP64 fields and a ZIP64 end record, so files above 4 GiB are written in full (APPNOTE
+//   6.3, as Python's zipfile reads). A small file has none.
 //
-// Writing is atomic (io/AtomicFile.h): the archive is streamed into a new temporary file in the
+// The default level, 6 (numpy.savez_compressed's), is measured: bench/bench_npz on the T of
+// scenes/paper/bubbles-r1.yaml (10000 x 250000, 63307 nonzeros, 0.55 MB of arrays; its trace took
+// 1.49 s on this 2-core machine), median of 7 writes each:
+//   level 0 (stored)  547617 bytes  0.008 s
+//   level 1           176885 bytes  0.016 s   (1 % of the trace time)
+//   level 6           148744 bytes  0.054 s   (4 %)
+//   level 9           141096 bytes  0.275 s   (18 %)
+// Level 6 is 16 % smaller than level 1 for a write that stays far below the target of a third of
+// the trace time; level 9 saves 5 % more for five times the time (zlib's long match chains are slow
+// on T's repetitive values), which grows with T. The sizes are deterministic; the times vary with
+// the machine's load.
+//
+// Writing is atomic (io/AtomicFile.h): libzip streams the archive into a new temporary file in the
 // target's folder (".<name>.tmp-<random>"), fsync'ed and renamed onto the path; on any failure the
 // temporary is removed and an existing file at the path is left untouched. The matrix is checked
 // first (CsrMatrix::check). Errors are std::runtime_error "cannot write LTM file '<path>': ...".
 //
-// What read_ltm_npz reads: our files, and files written by scipy.sparse.save_npz for a CSR matrix,
-// compressed (the default; numpy writes every entry with ZIP64 local headers, "force_zip64") or
-// not (compressed=False: ZIP method 0, stored). ZIP64 records, data descriptors and archive
-// comments are understood; encrypted entries, multi-disk archives and other compression methods
-// are not. Accepted .npy headers: versions 1.0, 2.0 and 3.0, either byte order:
+// What read_ltm_npz reads (libzip opens the archive; io/Npy.h parses the .npy headers): our files,
+// and files written by scipy.sparse.save_npz for a CSR matrix, compressed (the default; numpy
+// writes every entry with ZIP64 local headers) or not (compressed=False: ZIP method 0, stored).
+// ZIP64 records, data descriptors and archive comments are understood; encrypted entries,
+// multi-disk archives and compression methods other than stored and deflate are not (even where
+// libzip could read them). Accepted .npy headers: versions 1.0, 2.0 and 3.0, either byte order:
 //   data     float32 or float64 (converted to float32; a finite float64 that overflows float32
 //            is an error), 1-D
 //   indices  int32 or int64 (converted to int32; a value outside int32 is an error), 1-D
@@ -43,10 +54,13 @@
 //            reported as "not a CSR matrix")
 // Other entries are ignored (as scipy ignores them). The matrix is then validated by
 // CsrMatrix::check, so unsorted or duplicate column indices in a row are rejected (scipy allows
-// them; call `T.sum_duplicates()` before saving). Every entry's size and CRC-32 are verified.
-// Errors are std::runtime_error naming the file and what is wrong: not a ZIP archive, truncated
-// or corrupt archive, CRC mismatch, missing array, bad dtype, bad shape, not a CSR matrix, or the
-// CsrMatrix::check message.
+// them; call `T.sum_duplicates()` before saving). Every entry's size and CRC-32 are verified (by
+// libzip while inflating, and the size again against the .npy header).
+// Errors are std::runtime_error "cannot read LTM file '<path>': <what>", where <what> says what is
+// wrong in these words (libzip's own error text follows in parentheses where it found it): no
+// such file, it is a folder, the file is empty, a single .npy array, not a ZIP archive, truncated
+// or corrupt (ZIP) archive, CRC-32 mismatch in entry '<name>', bad deflate data, encrypted, missing
+// array, bad dtype, bad shape, not a CSR matrix, or the CsrMatrix::check message.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -56,7 +70,7 @@
 
 namespace ltm {
 
-// Compression level and ZIP64 (io/Npz.h), under the name this header has always offered.
+// The compression level (io/Npz.h), under the name this header has always offered.
 using NpzWriteOptions = io::NpzWriteOptions;
 
 void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options = {});

@@ -1,19 +1,21 @@
 #include "io/Npz.h"
 
-#include <zlib.h>
+#include <zip.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
-#include <functional>
+#include <exception>
 #include <limits>
+#include <memory>
 #include <new>
 #include <set>
 #include <stdexcept>
 
 #include "io/AtomicFile.h"
+#include "io/Npy.h"
 
 namespace ltm::io {
-
 
 NpyArray npy_bytes_scalar(std::string name, const std::string& bytes) {
     return NpyArray{std::move(name), "|S" + std::to_string(bytes.size()), {}, bytes.data(), bytes.size(), {}};
@@ -21,44 +23,8 @@ NpyArray npy_bytes_scalar(std::string name, const std::string& bytes) {
 
 namespace {
 
-constexpr std::uint32_t kSigLocal = 0x04034b50, kSigCentral = 0x02014b50, kSigEnd = 0x06054b50,
-                        kSigEnd64 = 0x06064b50, kSigLocator64 = 0x07064b50;
-constexpr std::uint64_t k32 = 0xFFFFFFFFull;  // a 32-bit field with this value defers to ZIP64
-constexpr std::uint16_t kDosTime = 0, kDosDate = (0 << 9) | (1 << 5) | 1;  // 1980-01-01 00:00:00
-constexpr std::size_t kChunk = std::size_t(1) << 20;
-
-constexpr bool kHostLittle = detail::kHostLittle;
-
-void put16(std::string& s, std::uint16_t v) {
-    for (int i = 0; i < 2; ++i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-}
-void put32(std::string& s, std::uint32_t v) {
-    for (int i = 0; i < 4; ++i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-}
-void put64(std::string& s, std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) s.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-}
-
-// Python's repr of a shape tuple: "()", "(N,)", "(A, B)", ...
-std::string shape_repr(const std::vector<std::uint64_t>& shape) {
-    if (shape.size() == 1) return "(" + std::to_string(shape[0]) + ",)";
-    std::string s = "(";
-    for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
-    return s + ")";
-}
-
-// The .npy preamble (format 1.0) for a C-order array. Fails (empty result) when the header does
-// not fit version 1.0's 16-bit length, which no shape numpy allows (at most 32 dimensions) reaches.
-std::string npy_preamble(const std::string& descr, const std::string& shape) {
-    std::string dict = "{'descr': '" + descr + "', 'fortran_order': False, 'shape': " + shape + ", }";
-    const std::size_t unpadded = 10 + dict.size() + 1;  // magic 6, version 2, length 2, '\n'
-    dict.append((64 - unpadded % 64) % 64, ' ');
-    dict.push_back('\n');
-    if (dict.size() > 0xFFFF) return {};
-    std::string out("\x93NUMPY\x01\x00", 8);
-    put16(out, static_cast<std::uint16_t>(dict.size()));
-    return out + dict;
-}
+// 1980-01-01 00:00:00 as a DOS date and time: the earliest a ZIP header can hold.
+constexpr zip_uint16_t kDosTime = 0, kDosDate = (0 << 9) | (1 << 5) | 1;
 
 // What a descr says, or why it is not supported ("" when it is).
 struct Dtype {
@@ -90,227 +56,183 @@ std::string parse_descr(const std::string& d, Dtype& t) {
         return "dtype '" + d + "' has the wrong byte-order character: " +
                (bytewise ? "'|' for single bytes and byte strings" : "'<' or '>' for multi-byte numbers");
     t.itemsize = n;
-    t.swap = !bytewise && (order == '<') != kHostLittle;
+    t.swap = !bytewise && (order == '<') != detail::kHostLittle;
     return "";
 }
 
-using Sink = NpySink;
+// The first failure inside a libzip callback. Callbacks are C: they must not throw, so they record
+// why they failed here and return -1; write_archive reports it once libzip has given up.
+struct Failure {
+    std::exception_ptr error;  // a complete "cannot write ..." error (AtomicFile's)
+    std::string reason;        // or the reason to report through AtomicFile::fail
+    bool any() const { return error || !reason.empty(); }
+};
 
-struct Deflater {
-    z_stream zs{};
-    bool live = false;
-    ~Deflater() {
-        if (live) deflateEnd(&zs);
+// The archive's destination for libzip: a write source (zip_source_function) backed by an
+// io::AtomicFile.
+//
+// Why a streaming write source rather than building the archive in a zip_source_buffer and writing
+// those bytes through AtomicFile afterwards: a T of a large render is several GB compressed, and a
+// buffer would hold the whole archive in memory on top of the matrix. Here libzip writes each
+// entry's compressed bytes to the file as it produces them (seeking back to finish each local
+// header), so the memory beyond the matrix is libzip's few-KiB buffers. libzip's own temporary
+// file and rename (zip_open by name) are never used: AtomicFile is the one atomic writer, and its
+// commit happens after zip_close, not inside libzip.
+//
+// libzip only creates (the source reports that no archive exists yet, so nothing is ever read
+// back) and then calls BEGIN_WRITE, WRITE / SEEK_WRITE / TELL_WRITE, COMMIT_WRITE (or
+// ROLLBACK_WRITE after a failure).
+struct ArchiveSink {
+    AtomicFile& file;
+    Failure& failure;
+    zip_error_t error;
+    std::uint64_t end = 0;  // bytes written so far (the file's size)
+    bool complete = false;  // libzip committed: the archive is whole
+
+    ArchiveSink(AtomicFile& f, Failure& fl) : file(f), failure(fl) { zip_error_init(&error); }
+    ~ArchiveSink() { zip_error_fini(&error); }
+
+    static zip_int64_t callback(void* state, void* data, zip_uint64_t len, zip_source_cmd_t cmd) {
+        auto& s = *static_cast<ArchiveSink*>(state);
+        switch (cmd) {
+            case ZIP_SOURCE_SUPPORTS: return ZIP_SOURCE_SUPPORTS_WRITABLE;
+            case ZIP_SOURCE_STAT:  // "no such archive": libzip creates a new one
+                zip_error_set(&s.error, ZIP_ER_READ, ENOENT);
+                return -1;
+            case ZIP_SOURCE_BEGIN_WRITE:
+                s.file.seek(0);
+                s.end = 0;
+                return 0;
+            case ZIP_SOURCE_WRITE:
+                try {
+                    s.file.write(data, static_cast<std::size_t>(len));
+                } catch (...) {
+                    if (!s.failure.any()) s.failure.error = std::current_exception();
+                    zip_error_set(&s.error, ZIP_ER_WRITE, errno);
+                    return -1;
+                }
+                s.end = std::max(s.end, s.file.tell());
+                return static_cast<zip_int64_t>(len);
+            case ZIP_SOURCE_SEEK_WRITE: {
+                const zip_int64_t to = zip_source_seek_compute_offset(s.file.tell(), s.end, data, len, &s.error);
+                if (to < 0) return -1;
+                s.file.seek(static_cast<std::uint64_t>(to));
+                return 0;
+            }
+            case ZIP_SOURCE_TELL_WRITE: return static_cast<zip_int64_t>(s.file.tell());
+            case ZIP_SOURCE_COMMIT_WRITE: s.complete = true; return 0;
+            case ZIP_SOURCE_ROLLBACK_WRITE: return 0;  // the AtomicFile removes its temporary
+            case ZIP_SOURCE_ERROR: return zip_error_to_data(&s.error, data, len);
+            case ZIP_SOURCE_FREE: return 0;  // owned by write_archive
+            default:  // OPEN, READ, SEEK, TELL, CLOSE, REMOVE: there is nothing to read or remove
+                zip_error_set(&s.error, ZIP_ER_OPNOTSUPP, 0);
+                return -1;
+        }
     }
 };
 
-// A streaming ZIP writer: entries are deflated as they are produced; each local header is patched
-// with the CRC-32 and sizes once its entry is complete (AtomicFile seeks back), so no data
-// descriptors are needed and nothing is buffered beyond one chunk.
-class ZipWriter {
-public:
-    ZipWriter(AtomicFile& file, const NpzWriteOptions& options) : f_(file), opt_(options) {}
+// One entry's bytes for libzip to pull: the .npy preamble, then the array's data (viewed, swapped
+// to the descr's byte order, or from NpyArray::fill).
+struct EntrySource {
+    const NpyArray& array;
+    std::string entry, preamble;
+    Dtype dtype;
+    Failure& failure;
+    zip_error_t error;
+    std::uint64_t pos = 0;
 
-    // One deflated entry of exactly `size` bytes, produced by produce(sink).
-    void add(const std::string& name, std::uint64_t size, const std::function<void(const Sink&)>& produce) {
-        Entry e;
-        e.name = name;
-        e.offset = f_.tell();
-        e.usize = size;
-        Deflater d;
-        if (deflateInit2(&d.zs, opt_.compression_level, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-            f_.fail("zlib's deflateInit2 failed (compression level " + std::to_string(opt_.compression_level) + ")");
-        d.live = true;
-        const std::uint64_t bound = deflateBound(&d.zs, static_cast<uLong>(size));
-        e.zip64_local = opt_.force_zip64 || size >= k32 || bound >= k32;
+    EntrySource(const NpyArray& a, std::string p, Dtype d, Failure& f)
+        : array(a), entry(a.name + ".npy"), preamble(std::move(p)), dtype(d), failure(f) {
+        zip_error_init(&error);
+    }
+    ~EntrySource() { zip_error_fini(&error); }
 
-        std::string local;
-        put32(local, kSigLocal);
-        put16(local, e.zip64_local ? 45 : 20);  // version needed: 4.5 for ZIP64, 2.0 for deflate
-        put16(local, 0);                         // flags
-        put16(local, 8);                         // deflate
-        put16(local, kDosTime);
-        put16(local, kDosDate);
-        put32(local, 0);  // CRC-32, sizes: patched below
-        put32(local, 0);
-        put32(local, 0);
-        put16(local, static_cast<std::uint16_t>(name.size()));
-        put16(local, e.zip64_local ? 20 : 0);
-        local += name;
-        if (e.zip64_local) {
-            put16(local, 0x0001);
-            put16(local, 16);
-            put64(local, 0);
-            put64(local, 0);
+    std::uint64_t size() const { return preamble.size() + static_cast<std::uint64_t>(array.bytes); }
+
+    // Up to n bytes at pos; throws (a message without the file's name) on failure.
+    std::size_t read(unsigned char* out, std::size_t n) {
+        n = static_cast<std::size_t>(std::min<std::uint64_t>(n, size() - pos));
+        std::size_t done = 0;
+        if (pos < preamble.size()) {
+            done = std::min(n, static_cast<std::size_t>(preamble.size() - pos));
+            std::memcpy(out, preamble.data() + pos, done);
         }
-        f_.write(local.data(), local.size());
-
-        std::vector<unsigned char> out(kChunk);
-        std::uint64_t consumed = 0, produced = 0;
-        uLong crc = crc32(0L, Z_NULL, 0);
-        auto pump = [&](int flush) {
-            int ret;
-            do {
-                d.zs.next_out = out.data();
-                d.zs.avail_out = static_cast<uInt>(out.size());
-                ret = deflate(&d.zs, flush);
-                if (ret == Z_STREAM_ERROR) f_.fail("zlib's deflate failed on entry '" + name + "'");
-                const std::size_t have = out.size() - d.zs.avail_out;
-                if (have > 0) f_.write(out.data(), have);
-                produced += have;
-            } while (d.zs.avail_out == 0 || (flush == Z_FINISH && ret != Z_STREAM_END));
-        };
-        const Sink sink = [&](const void* p, std::size_t n) {
-            const auto* bytes = static_cast<const unsigned char*>(p);
-            while (n > 0) {
-                const std::size_t m = std::min<std::size_t>(n, std::size_t(1) << 30);
-                crc = crc32_z(crc, bytes, m);
-                d.zs.next_in = const_cast<unsigned char*>(bytes);
-                d.zs.avail_in = static_cast<uInt>(m);
-                pump(Z_NO_FLUSH);
-                bytes += m;
-                n -= m;
-                consumed += m;
+        const std::uint64_t at = pos + done - preamble.size();  // offset in the array's data
+        const std::size_t want = n - done;
+        if (want > 0) {
+            if (array.fill) {
+                std::size_t got = 0;
+                try {
+                    got = array.fill(at, out + done, want);
+                } catch (const std::exception& e) {
+                    throw std::runtime_error("array '" + array.name + "': " + e.what());
+                }
+                if (got > want) throw std::runtime_error("array '" + array.name + "': its fill overran the buffer");
+                if (got < want)
+                    throw std::runtime_error("entry '" + entry + "' was given " + std::to_string(pos + done + got) +
+                                             " bytes, but its shape and dtype need " + std::to_string(size()));
+            } else {
+                const auto* data = static_cast<const unsigned char*>(array.data);
+                if (!dtype.swap) {
+                    std::memcpy(out + done, data + at, want);
+                } else {  // byte b of an element in the file is byte itemsize - 1 - b in memory
+                    const std::size_t is = dtype.itemsize;
+                    for (std::size_t i = 0; i < want; ++i) {
+                        const std::uint64_t k = at + i;
+                        out[done + i] = data[k - k % is + (is - 1 - k % is)];
+                    }
+                }
             }
-        };
-        produce(sink);
-        d.zs.next_in = nullptr;
-        d.zs.avail_in = 0;
-        pump(Z_FINISH);
-        if (consumed != size)
-            f_.fail("entry '" + name + "' was given " + std::to_string(consumed) + " bytes, but its shape and dtype need " +
-                    std::to_string(size));
-        e.crc = static_cast<std::uint32_t>(crc);
-        e.csize = produced;
-
-        const std::uint64_t end = f_.tell();
-        std::string patch;
-        put32(patch, e.crc);
-        put32(patch, e.zip64_local ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.csize));
-        put32(patch, e.zip64_local ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.usize));
-        f_.seek(e.offset + 14);
-        f_.write(patch.data(), patch.size());
-        if (e.zip64_local) {
-            std::string sizes;
-            put64(sizes, e.usize);
-            put64(sizes, e.csize);
-            f_.seek(e.offset + 30 + name.size() + 4);
-            f_.write(sizes.data(), sizes.size());
         }
-        f_.seek(end);
-        entries_.push_back(e);
+        pos += n;
+        return n;
     }
 
-    // The central directory and the end records (ZIP64 where needed).
-    void finish() {
-        const std::uint64_t cd_offset = f_.tell();
-        const bool force = opt_.force_zip64;
-        std::string cd;
-        for (const Entry& e : entries_) {
-            const bool big_u = force || e.usize >= k32, big_c = force || e.csize >= k32,
-                       big_o = force || e.offset >= k32;
-            std::string extra;
-            if (big_u || big_c || big_o) {
-                std::string fields;
-                if (big_u) put64(fields, e.usize);
-                if (big_c) put64(fields, e.csize);
-                if (big_o) put64(fields, e.offset);
-                put16(extra, 0x0001);
-                put16(extra, static_cast<std::uint16_t>(fields.size()));
-                extra += fields;
+    static zip_int64_t callback(void* state, void* data, zip_uint64_t len, zip_source_cmd_t cmd) {
+        auto& s = *static_cast<EntrySource*>(state);
+        switch (cmd) {
+            case ZIP_SOURCE_SUPPORTS: return ZIP_SOURCE_SUPPORTS_READABLE;
+            case ZIP_SOURCE_OPEN: s.pos = 0; return 0;
+            case ZIP_SOURCE_READ:
+                try {
+                    return static_cast<zip_int64_t>(s.read(static_cast<unsigned char*>(data), static_cast<std::size_t>(len)));
+                } catch (const std::bad_alloc&) {
+                    if (!s.failure.any()) s.failure.reason = "out of memory";
+                } catch (const std::exception& e) {
+                    if (!s.failure.any()) s.failure.reason = e.what();
+                }
+                zip_error_set(&s.error, ZIP_ER_READ, 0);
+                return -1;
+            case ZIP_SOURCE_CLOSE: return 0;
+            case ZIP_SOURCE_STAT: {
+                auto* st = ZIP_SOURCE_GET_ARGS(zip_stat_t, data, len, &s.error);
+                if (!st) return -1;
+                zip_stat_init(st);
+                st->valid |= ZIP_STAT_SIZE;
+                st->size = s.size();
+                return sizeof(*st);
             }
-            const std::uint16_t version = (e.zip64_local || !extra.empty()) ? 45 : 20;
-            put32(cd, kSigCentral);
-            put16(cd, version);  // made by: MS-DOS host (attributes unused), spec version
-            put16(cd, version);  // needed
-            put16(cd, 0);
-            put16(cd, 8);
-            put16(cd, kDosTime);
-            put16(cd, kDosDate);
-            put32(cd, e.crc);
-            put32(cd, big_c ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.csize));
-            put32(cd, big_u ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.usize));
-            put16(cd, static_cast<std::uint16_t>(e.name.size()));
-            put16(cd, static_cast<std::uint16_t>(extra.size()));
-            put16(cd, 0);  // comment length
-            put16(cd, 0);  // disk number start
-            put16(cd, 0);  // internal attributes
-            put32(cd, 0);  // external attributes
-            put32(cd, big_o ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(e.offset));
-            cd += e.name;
-            cd += extra;
+            case ZIP_SOURCE_ERROR: return zip_error_to_data(&s.error, data, len);
+            case ZIP_SOURCE_FREE: return 0;  // owned by write_archive
+            default: zip_error_set(&s.error, ZIP_ER_OPNOTSUPP, 0); return -1;
         }
-        f_.write(cd.data(), cd.size());
-        const std::uint64_t cd_size = cd.size(), n = entries_.size();
-        const bool big_n = force || n >= 0xFFFF, big_size = force || cd_size >= k32,
-                   big_off = force || cd_offset >= k32;
-        std::string tail;
-        if (big_n || big_size || big_off) {
-            const std::uint64_t record = f_.tell();
-            put32(tail, kSigEnd64);
-            put64(tail, 44);  // size of the remaining record
-            put16(tail, 45);
-            put16(tail, 45);
-            put32(tail, 0);  // this disk
-            put32(tail, 0);  // disk with the central directory
-            put64(tail, n);
-            put64(tail, n);
-            put64(tail, cd_size);
-            put64(tail, cd_offset);
-            put32(tail, kSigLocator64);
-            put32(tail, 0);  // disk with the ZIP64 end record
-            put64(tail, record);
-            put32(tail, 1);  // total number of disks
-        }
-        put32(tail, kSigEnd);
-        put16(tail, 0);
-        put16(tail, 0);
-        put16(tail, big_n ? 0xFFFF : static_cast<std::uint16_t>(n));
-        put16(tail, big_n ? 0xFFFF : static_cast<std::uint16_t>(n));
-        put32(tail, big_size ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(cd_size));
-        put32(tail, big_off ? static_cast<std::uint32_t>(k32) : static_cast<std::uint32_t>(cd_offset));
-        put16(tail, 0);  // comment length
-        f_.write(tail.data(), tail.size());
     }
-
-private:
-    struct Entry {
-        std::string name;
-        std::uint64_t offset = 0, usize = 0, csize = 0;
-        std::uint32_t crc = 0;
-        bool zip64_local = false;
-    };
-    AtomicFile& f_;
-    NpzWriteOptions opt_;
-    std::vector<Entry> entries_;
 };
-
-// Streams `bytes` bytes of elements of `itemsize` bytes, reversing each element's bytes, in
-// chunks of kChunk.
-void emit_swapped(const Sink& sink, const unsigned char* p, std::size_t bytes, std::size_t itemsize) {
-    std::vector<unsigned char> buf(std::min(bytes, kChunk / itemsize * itemsize));
-    while (bytes > 0) {
-        const std::size_t m = std::min(bytes, buf.size());
-        for (std::size_t i = 0; i < m; i += itemsize)
-            for (std::size_t b = 0; b < itemsize; ++b) buf[i + b] = p[i + itemsize - 1 - b];
-        sink(buf.data(), m);
-        p += m;
-        bytes -= m;
-    }
-}
 
 struct Checked {
     std::string preamble;
     Dtype dtype;
 };
 
+std::string libzip_text(zip_error_t* e) { return std::string("libzip: ") + zip_error_strerror(e); }
+
 void write_archive(const std::string& path, const std::vector<NpyArray>& arrays, const NpzWriteOptions& options,
                    const std::string& kind) {
     const auto fail = [&](const std::string& why) {
         throw std::runtime_error("cannot write " + kind + " '" + path + "': " + why);
     };
-    if (options.compression_level < 0 || options.compression_level > 9)
-        fail("compression level " + std::to_string(options.compression_level) + " is outside 0..9");
+    const int level = options.compression_level;
+    if (level < 0 || level > 9) fail("compression level " + std::to_string(level) + " is outside 0..9");
 
     std::vector<Checked> checked(arrays.size());
     std::set<std::string> names;
@@ -330,47 +252,73 @@ void write_archive(const std::string& path, const std::vector<NpyArray>& arrays,
         }
         if (count > std::numeric_limits<std::uint64_t>::max() / c.dtype.itemsize ||
             count * c.dtype.itemsize != a.bytes)
-            fail(what + " has " + std::to_string(a.bytes) + " bytes, but its shape " + shape_repr(a.shape) +
+            fail(what + " has " + std::to_string(a.bytes) + " bytes, but its shape " + npy_shape_repr(a.shape) +
                  " of '" + a.descr + "' needs " + std::to_string(count) + " x " + std::to_string(c.dtype.itemsize));
-        if (a.bytes > 0 && a.data == nullptr && !a.produce) fail(what + " has no data");
-        c.preamble = npy_preamble(a.descr, shape_repr(a.shape));
-        if (c.preamble.empty()) fail(what + ": the .npy header is too long (too many dimensions)");
+        if (a.bytes > 0 && a.data == nullptr && !a.fill) fail(what + " has no data");
+        try {
+            c.preamble = npy_preamble(a.descr, a.shape);
+        } catch (const NpyError& e) {
+            fail(what + ": " + e.what());
+        }
     }
 
     AtomicFile file(path, kind);
-    ZipWriter zip(file, options);
-    for (std::size_t k = 0; k < arrays.size(); ++k) {
-        const NpyArray& a = arrays[k];
-        const Checked& c = checked[k];
-        zip.add(a.name + ".npy", c.preamble.size() + static_cast<std::uint64_t>(a.bytes), [&](const Sink& sink) {
-            sink(c.preamble.data(), c.preamble.size());
-            if (a.produce) {
-                // The sink's own failures (writing the file) are complete messages already.
-                bool sink_failed = false;
-                const Sink guarded = [&](const void* p, std::size_t n) {
-                    try {
-                        sink(p, n);
-                    } catch (...) {
-                        sink_failed = true;
-                        throw;
-                    }
-                };
-                try {
-                    a.produce(guarded);
-                } catch (const std::exception& e) {
-                    if (sink_failed) throw;
-                    file.fail("array '" + a.name + "': " + e.what());
-                }
-                return;
-            }
-            if (a.bytes == 0) return;
-            if (c.dtype.swap)
-                emit_swapped(sink, static_cast<const unsigned char*>(a.data), a.bytes, c.dtype.itemsize);
-            else
-                sink(a.data, a.bytes);
-        });
+    if (arrays.empty()) {
+        // libzip removes an archive without entries instead of writing one: the end record alone.
+        file.write(std::string("PK\x05\x06", 4) + std::string(18, '\0'));
+        file.commit();
+        return;
     }
-    zip.finish();
+
+    Failure failure;
+    ArchiveSink sink(file, failure);
+    std::vector<std::unique_ptr<EntrySource>> entries;
+    zip_error_t error;
+    zip_error_init(&error);
+    const auto libzip_failed = [&](zip_error_t* e) {
+        const std::string text = libzip_text(e);
+        zip_error_fini(&error);
+        file.fail(text);
+    };
+    zip_source_t* target = zip_source_function_create(&ArchiveSink::callback, &sink, &error);
+    if (!target) libzip_failed(&error);
+    zip_t* za = zip_open_from_source(target, ZIP_CREATE | ZIP_TRUNCATE, &error);
+    if (!za) {
+        zip_source_free(target);
+        libzip_failed(&error);
+    }
+    // Until zip_close succeeds, za owns the sources; any early exit discards it.
+    std::unique_ptr<zip_t, void (*)(zip_t*)> open(za, zip_discard);
+    const auto zip_failed = [&] {
+        // Report the callback's own failure if there was one, else libzip's; after discarding the
+        // archive, which calls back into the sources one last time.
+        const std::string text = libzip_text(zip_get_error(za));
+        open.reset();
+        zip_error_fini(&error);
+        if (failure.error) std::rethrow_exception(failure.error);
+        file.fail(failure.reason.empty() ? text : failure.reason);
+    };
+
+    for (std::size_t k = 0; k < arrays.size(); ++k) {
+        entries.push_back(std::make_unique<EntrySource>(arrays[k], checked[k].preamble, checked[k].dtype, failure));
+        EntrySource& e = *entries.back();
+        zip_source_t* src = zip_source_function(za, &EntrySource::callback, &e);
+        if (!src) zip_failed();
+        const zip_int64_t index = zip_file_add(za, e.entry.c_str(), src, ZIP_FL_ENC_UTF_8);
+        if (index < 0) {
+            zip_source_free(src);
+            zip_failed();
+        }
+        const auto i = static_cast<zip_uint64_t>(index);
+        if (zip_set_file_compression(za, i, level == 0 ? ZIP_CM_STORE : ZIP_CM_DEFLATE,
+                                     static_cast<zip_uint32_t>(level)) != 0 ||
+            zip_file_set_dostime(za, i, kDosTime, kDosDate, 0) != 0)
+            zip_failed();
+    }
+    if (zip_close(za) != 0) zip_failed();
+    open.release();  // zip_close freed it
+    zip_error_fini(&error);
+    if (failure.any() || !sink.complete) file.fail("internal error: libzip closed an incomplete archive");
     file.commit();
 }
 

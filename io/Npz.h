@@ -7,23 +7,27 @@
 //                                        io::npy_array("mask", mask, {h, w})});
 //
 // What write_npz writes (byte-for-byte deterministic: the same arrays and options always give the
-// same file, whatever the machine, as long as zlib's deflate is the same version):
-//   A ZIP archive with one entry "<name>.npy" per array, in the order given. Each entry is
-//   deflate-compressed (ZIP method 8, raw zlib stream, level 6 by default as
-//   numpy.savez_compressed) with its CRC-32, a fixed timestamp (1980-01-01 00:00) and no extra
-//   attributes. Each .npy is format version 1.0: "\x93NUMPY" 1 0, a little-endian uint16 header
+// same file, whatever the machine, as long as libzip and zlib are the same versions):
+//   A ZIP archive, written by libzip, with one entry "<name>.npy" per array, in the order given.
+//   Each entry is deflate-compressed (ZIP method 8, raw deflate stream from zlib through libzip,
+//   level 6 by default as numpy.savez_compressed; level 0 stores it instead, ZIP method 0) with
+//   its CRC-32, a fixed timestamp (1980-01-01 00:00, DOS date 0x0021 time 0), no extra fields and
+//   no comments; otherwise libzip's defaults for a new entry ("made by" Unix, version 6.3, file
+//   mode 0100666 in the external attributes; `zipinfo -v` shows all of it).
+//   Each .npy is format version 1.0 (io/Npy.h): "\x93NUMPY" 1 0, a little-endian uint16 header
 //   length, and the header "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }" padded
 //   with spaces and ended by '\n' so that the preamble is a multiple of 64 bytes (as numpy pads
 //   it); the array's bytes follow in C order (the last index varies fastest), in the byte order
 //   the descr states.
-//   ZIP64: an entry whose size (or worst-case compressed size, zlib's deflateBound) reaches
-//   0xFFFFFFFF bytes gets ZIP64 size fields in its local and central headers; an entry starting
-//   at or beyond 4 GiB gets a ZIP64 offset; an archive whose central directory lies beyond 4 GiB
-//   (or with 65535 entries or more) ends with a ZIP64 end-of-central-directory record and
-//   locator. So archives above 4 GiB are written in full (APPNOTE 6.3, as Python's zipfile reads).
-//   NpzWriteOptions::force_zip64 writes every ZIP64 field even for small files (for tests).
-// Writing is atomic (io/AtomicFile.h): the archive is streamed into a temporary file beside
-// `path` and renamed onto it once complete; on any failure `path` is left as it was.
+//   ZIP64 where needed, as libzip decides: an entry that could compress to 4 GiB or more (by
+//   libzip's worst-case estimate of deflate) gets ZIP64 sizes in its local header; sizes or offsets beyond 0xFFFFFFFF get ZIP64 fields in
+//   the central directory, which then ends with a ZIP64 end-of-central-directory record and
+//   locator (also with 65535 entries or more). So archives above 4 GiB are written in full
+//   (APPNOTE 6.3, as Python's zipfile and numpy read them). Small archives have no ZIP64 fields.
+//   No arrays at all give the 22-byte empty ZIP archive (an end record only).
+// Writing is atomic (io/AtomicFile.h): libzip writes the archive through a custom write source
+// into an AtomicFile (streaming; see Npz.cpp), which is renamed onto `path` once libzip has
+// completed it; on any failure `path` is left as it was.
 //
 // Supported dtypes (NpyArray::descr, numpy's array-protocol strings): byte order '<' (little) or
 // '>' (big) for multi-byte numbers, '|' for single bytes and byte strings; kinds
@@ -60,12 +64,12 @@ constexpr bool negative(T v) {
 }  // namespace detail
 
 struct NpzWriteOptions {
-    int compression_level = 6;  // zlib level 0..9 (0: deflate with stored blocks)
-    bool force_zip64 = false;   // ZIP64 fields in every header and a ZIP64 end record
+    int compression_level = 6;  // zlib level 1..9 for deflate; 0 stores the entries (ZIP method 0)
 };
 
-// Receives the bytes of an array as they go into the file, in pieces of any size.
-using NpySink = std::function<void(const void* bytes, std::size_t n)>;
+// Fills `out` with the array's bytes [offset, offset + n) as the file holds them and returns how
+// many it wrote: n, or fewer where the array's data ends.
+using NpyFill = std::function<std::size_t(std::uint64_t offset, void* out, std::size_t n)>;
 
 // One dense array, not owning its data (which must outlive the write_npz call).
 struct NpyArray {
@@ -74,11 +78,12 @@ struct NpyArray {
     std::vector<std::uint64_t> shape;   // C order; {} is a scalar (one element)
     const void* data = nullptr;         // product(shape) elements, host byte order
     std::size_t bytes = 0;              // must equal product(shape) * itemsize
-    // Instead of `data` (when set): produces the array's `bytes` bytes exactly as the file holds
-    // them (in the descr's byte order), by calls of the sink; for data converted or generated on
-    // the fly without a copy in memory. An exception it throws fails the write, with the array
-    // named in the message.
-    std::function<void(const NpySink&)> produce;
+    // Instead of `data` (when set): gives the array's `bytes` bytes exactly as the file holds them
+    // (in the descr's byte order), piece by piece as libzip pulls them (in order, a few KiB at a
+    // time); for data converted or generated on the fly without a copy in memory. Fewer bytes in
+    // all than `bytes` fail the write; so does an exception it throws, with the array named in
+    // the message.
+    NpyFill fill;
 };
 
 // The descr of a C++ element type: float "<f4", double "<f8", std::int8_t "|i1", std::uint8_t
@@ -112,7 +117,7 @@ NpyArray npy_array(std::string name, const std::vector<T>& values) {
 }
 
 // An array of dtype npy_descr<Out>() holding `values` converted to Out one by one while writing,
-// in blocks of 1 MiB (no converted copy is ever held whole): e.g. int64 indices stored as int32.
+// as libzip pulls them (no converted copy is ever held): e.g. int64 indices stored as int32.
 // Integer values that do not survive the conversion exactly fail the write (naming the array, the
 // value and its index); a conversion to float rounds as static_cast does. Views `values` like
 // npy_array.
@@ -121,29 +126,33 @@ NpyArray npy_converted(std::string name, const std::vector<In>& values, std::vec
     const In* v = values.data();
     const std::size_t n = values.size();
     const std::string descr = npy_descr<Out>();
-    auto produce = [v, n, descr](const NpySink& sink) {
-        constexpr std::size_t per = (std::size_t(1) << 20) / sizeof(Out);
-        std::vector<unsigned char> buf(std::min(n, per) * sizeof(Out));
-        for (std::size_t start = 0; start < n; start += per) {
-            const std::size_t m = std::min(per, n - start);
-            for (std::size_t i = 0; i < m; ++i) {
-                const In x = v[start + i];
-                const Out y = static_cast<Out>(x);
-                if constexpr (std::is_integral_v<Out>) {
-                    if (static_cast<In>(y) != x || detail::negative(x) != detail::negative(y))
-                        throw std::range_error("value " + std::to_string(x) + " at index " + std::to_string(start + i) +
-                                               " does not fit '" + descr + "'");
-                }
-                unsigned char raw[sizeof(Out)];
-                std::memcpy(raw, &y, sizeof(Out));
-                for (std::size_t b = 0; b < sizeof(Out); ++b)
-                    buf[i * sizeof(Out) + b] = detail::kHostLittle ? raw[b] : raw[sizeof(Out) - 1 - b];
+    auto fill = [v, n, descr](std::uint64_t offset, void* out, std::size_t len) -> std::size_t {
+        constexpr std::size_t S = sizeof(Out);
+        const std::uint64_t total = static_cast<std::uint64_t>(n) * S;
+        if (offset >= total) return 0;
+        len = static_cast<std::size_t>(std::min<std::uint64_t>(len, total - offset));
+        auto* o = static_cast<unsigned char*>(out);
+        for (std::size_t done = 0; done < len;) {
+            const std::uint64_t at = offset + done;
+            const std::size_t i = static_cast<std::size_t>(at / S), skip = static_cast<std::size_t>(at % S);
+            const In x = v[i];
+            const Out y = static_cast<Out>(x);
+            if constexpr (std::is_integral_v<Out>) {
+                if (static_cast<In>(y) != x || detail::negative(x) != detail::negative(y))
+                    throw std::range_error("value " + std::to_string(x) + " at index " + std::to_string(i) +
+                                           " does not fit '" + descr + "'");
             }
-            sink(buf.data(), m * sizeof(Out));
+            unsigned char raw[S], le[S];
+            std::memcpy(raw, &y, S);
+            for (std::size_t b = 0; b < S; ++b) le[b] = detail::kHostLittle ? raw[b] : raw[S - 1 - b];
+            const std::size_t m = std::min(S - skip, len - done);
+            std::memcpy(o + done, le + skip, m);
+            done += m;
         }
+        return len;
     };
     NpyArray a{std::move(name), descr, std::move(shape), nullptr, n * sizeof(Out), {}};
-    a.produce = std::move(produce);
+    a.fill = std::move(fill);
     return a;
 }
 template <class Out, class In>

@@ -268,15 +268,12 @@ TEST_F(LtmFileTest, RoundTripHandBuiltMatrices) {
 TEST_F(LtmFileTest, RoundTripOptions) {
     const CsrMatrix m = random_matrix(3000, 500, 9, 3);
     for (int level : {0, 1, 9}) {
-        for (bool z64 : {false, true}) {
-            SCOPED_TRACE("level " + std::to_string(level) + (z64 ? " zip64" : ""));
-            ltm::NpzWriteOptions o;
-            o.compression_level = level;
-            o.force_zip64 = z64;
-            ltm::write_ltm_npz(path("o.npz"), m, o);
-            EXPECT_TRUE(same(m, ltm::read_ltm_npz(path("o.npz"))));
-            EXPECT_EQ(slurp(path("o.npz")).find("PK\x06\x06") != std::string::npos, z64);  // ZIP64 end record
-        }
+        SCOPED_TRACE("level " + std::to_string(level));
+        ltm::NpzWriteOptions o;
+        o.compression_level = level;
+        ltm::write_ltm_npz(path("o.npz"), m, o);
+        EXPECT_TRUE(same(m, ltm::read_ltm_npz(path("o.npz"))));
+        EXPECT_EQ(slurp(path("o.npz")).find("PK\x06\x06"), std::string::npos);  // small: no ZIP64 end record
     }
 }
 
@@ -292,11 +289,8 @@ TEST_F(LtmFileTest, OutputIsDeterministic) {
 TEST_F(LtmFileTest, ScipyLoadsOurFile) {
     REQUIRE_SCIPY();
     const CsrMatrix m = small_matrix();
-    for (bool z64 : {false, true}) {
-        SCOPED_TRACE(z64 ? "forced ZIP64" : "plain");
-        ltm::NpzWriteOptions o;
-        o.force_zip64 = z64;
-        ltm::write_ltm_npz(path("ltm.npz"), m, o);
+    {
+        ltm::write_ltm_npz(path("ltm.npz"), m);
         int status = 0;
         const std::string out = run_python(path("load.py"), R"(
 import sys, zipfile, numpy as np, scipy.sparse as sp
@@ -408,6 +402,36 @@ print('data', *[float(v).hex() for v in T.data])
     }
 }
 
+// ZIP64 as Python writes it: numpy's ZIP64 local headers on every entry, and (past 65535 entries)
+// a ZIP64 end-of-central-directory record and locator. Our writer, through libzip, cannot be made
+// to write these for a small file, so Python provides them.
+TEST_F(LtmFileTest, ReadsZip64ArchivesWrittenByPython) {
+    REQUIRE_SCIPY();
+    int status = 0;
+    const std::string out = run_python(path("z64.py"), R"(
+import struct, zipfile, numpy as np, scipy.sparse as sp
+f = ')" + path("z64.npz") + R"('
+sp.save_npz(f, sp.csr_matrix(np.array([[0, 1.5, 0], [2, 0, -3]], np.float32)))
+with zipfile.ZipFile(f, 'a') as z:
+    for i in range(65535):
+        z.writestr('pad%d' % i, b'')
+raw = open(f, 'rb').read()
+first_extra = struct.unpack('<H', raw[30 + len('indices.npy'):30 + len('indices.npy') + 2])[0]
+print(raw[:4] == b'PK\x03\x04', first_extra == 1, b'PK\x06\x06' in raw, b'PK\x06\x07' in raw)
+)",
+                                        &status);
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_EQ(out, "True True True True\n");  // a ZIP64 extra field first in the local header; ZIP64 end records
+    const CsrMatrix T = ltm::read_ltm_npz(path("z64.npz"));
+    CsrMatrix expected;
+    expected.rows = 2;
+    expected.cols = 3;
+    expected.indptr = {0, 1, 3};
+    expected.indices = {1, 0, 2};
+    expected.data = {1.5f, 2.0f, -3.0f};
+    EXPECT_TRUE(same(expected, T));
+}
+
 TEST_F(LtmFileTest, RejectsScipyFilesThatAreNotUsableCsr) {
     REQUIRE_SCIPY();
     int status = 0;
@@ -493,8 +517,8 @@ TEST_F(LtmFileTest, CorruptFilesGiveErrorsNamingTheFile) {
         cases.push_back({"crc.npz", "CRC-32 mismatch in entry 'data.npy'"});
     }
     {
-        // Level 0: deflate with stored blocks, so a flipped payload byte keeps the stream valid and
-        // only the CRC can catch it.
+        // Level 0: stored entries (ZIP method 0), so a flipped payload byte can only be caught by
+        // the CRC.
         ltm::NpzWriteOptions o;
         o.compression_level = 0;
         ltm::write_ltm_npz(path("stored.npz"), m, o);

@@ -1,0 +1,193 @@
+#include "io/Npy.h"
+
+#include <cctype>
+#include <cstring>
+#include <limits>
+
+namespace ltm::io {
+
+namespace {
+
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+constexpr bool kHostLittle = true;
+#else
+constexpr bool kHostLittle = false;
+#endif
+
+constexpr std::size_t kMaxHeader = std::size_t(1) << 24;
+
+[[noreturn]] void bad(const std::string& why) { throw NpyError(why); }
+
+std::size_t get_le(const unsigned char* p, int n) {
+    std::size_t v = 0;
+    for (int i = n - 1; i >= 0; --i) v = (v << 8) | p[i];
+    return v;
+}
+
+// The header dict, one token at a time.
+class DictParser {
+public:
+    explicit DictParser(std::string_view text) : s_(text) {}
+
+    void parse(NpyHeader& h) {
+        bool have_descr = false, have_order = false, have_shape = false;
+        ws();
+        expect('{');
+        for (;;) {
+            ws();
+            if (peek() == '}') break;
+            const std::string key = string();
+            ws();
+            expect(':');
+            ws();
+            if (key == "descr") {
+                if (peek() == '[') fail("structured dtypes are not supported");
+                h.descr = string();
+                have_descr = true;
+            } else if (key == "fortran_order") {
+                h.fortran_order = word();
+                have_order = true;
+            } else if (key == "shape") {
+                h.shape = tuple();
+                have_shape = true;
+            } else {
+                fail("unexpected key '" + key + "'");
+            }
+            ws();
+            if (peek() == ',') {
+                ++i_;
+                continue;
+            }
+            if (peek() != '}') fail("expected ',' or '}'");
+        }
+        if (!have_descr || !have_order || !have_shape) fail("the header lacks 'descr', 'fortran_order' or 'shape'");
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& why) const {
+        bad("bad .npy header (" + why + "): " + std::string(s_.substr(0, 200)));
+    }
+    char peek() const { return i_ < s_.size() ? s_[i_] : '\0'; }
+    void ws() {
+        while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
+    }
+    void expect(char c) {
+        if (peek() != c) fail(std::string("expected '") + c + "'");
+        ++i_;
+    }
+    std::string string() {
+        const char q = peek();
+        if (q != '\'' && q != '"') fail("expected a string");
+        const std::size_t b = ++i_;
+        while (i_ < s_.size() && s_[i_] != q) ++i_;
+        if (i_ >= s_.size()) fail("unterminated string");
+        return std::string(s_.substr(b, i_++ - b));
+    }
+    bool word() {
+        const std::size_t b = i_;
+        while (i_ < s_.size() && std::isalpha(static_cast<unsigned char>(s_[i_]))) ++i_;
+        const std::string_view w = s_.substr(b, i_ - b);
+        if (w != "True" && w != "False") fail("expected True or False");
+        return w == "True";
+    }
+    std::vector<std::uint64_t> tuple() {
+        std::vector<std::uint64_t> v;
+        expect('(');
+        for (;;) {
+            ws();
+            if (peek() == ')') break;
+            if (!std::isdigit(static_cast<unsigned char>(peek()))) fail("expected a non-negative integer in the shape");
+            std::uint64_t x = 0;
+            while (std::isdigit(static_cast<unsigned char>(peek()))) {
+                if (x > (static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()) - 9) / 10)
+                    fail("shape entry too large");
+                x = x * 10 + static_cast<std::uint64_t>(s_[i_++] - '0');
+            }
+            if (peek() == 'L') ++i_;  // Python 2 long literal
+            v.push_back(x);
+            ws();
+            if (peek() == ',') {
+                ++i_;
+                continue;
+            }
+            if (peek() != ')') fail("expected ',' or ')' in the shape");
+        }
+        ++i_;
+        return v;
+    }
+
+    std::string_view s_;
+    std::size_t i_ = 0;
+};
+
+void parse_descr(NpyHeader& h) {
+    const std::string& d = h.descr;
+    const auto fail = [&] { bad("unsupported dtype '" + d + "'"); };
+    if (d.size() < 3) fail();
+    const char order = d[0];
+    if (order != '<' && order != '>' && order != '|' && order != '=') fail();
+    if (!std::isalpha(static_cast<unsigned char>(d[1]))) fail();
+    h.big_endian = order == '>' || (order == '=' && !kHostLittle);
+    h.kind = d[1];
+    std::size_t n = 0;
+    for (std::size_t i = 2; i < d.size(); ++i) {
+        if (!std::isdigit(static_cast<unsigned char>(d[i])) || n > 1000000) fail();
+        n = n * 10 + static_cast<std::size_t>(d[i] - '0');
+    }
+    if (n == 0) fail();
+    h.itemsize = h.kind == 'U' ? 4 * n : n;
+}
+
+}  // namespace
+
+std::string npy_shape_repr(const std::vector<std::uint64_t>& shape) {
+    if (shape.size() == 1) return "(" + std::to_string(shape[0]) + ",)";
+    std::string s = "(";
+    for (std::size_t i = 0; i < shape.size(); ++i) s += (i ? ", " : "") + std::to_string(shape[i]);
+    return s + ")";
+}
+
+std::string npy_preamble(const std::string& descr, const std::vector<std::uint64_t>& shape) {
+    std::string dict = "{'descr': '" + descr + "', 'fortran_order': False, 'shape': " + npy_shape_repr(shape) + ", }";
+    const std::size_t unpadded = 10 + dict.size() + 1;  // magic 6, version 2, length 2, '\n'
+    dict.append((64 - unpadded % 64) % 64, ' ');
+    dict.push_back('\n');
+    if (dict.size() > 0xFFFF) bad("the .npy header is too long (too many dimensions)");
+    std::string out("\x93NUMPY\x01\x00", 8);
+    out.push_back(static_cast<char>(dict.size() & 0xFF));
+    out.push_back(static_cast<char>(dict.size() >> 8));
+    return out + dict;
+}
+
+std::size_t npy_preamble_size(std::string_view head) {
+    if (head.size() < 8) return 8;
+    const auto* u = reinterpret_cast<const unsigned char*>(head.data());
+    if (std::memcmp(u, "\x93NUMPY", 6) != 0) bad("not a .npy array (bad magic)");
+    if ((u[6] != 1 && u[6] != 2 && u[6] != 3) || u[7] != 0)
+        bad("unsupported .npy version " + std::to_string(u[6]) + "." + std::to_string(u[7]));
+    const std::size_t prefix = u[6] == 1 ? 10 : 12;
+    if (head.size() < prefix) return prefix;
+    const std::size_t len = get_le(u + 8, u[6] == 1 ? 2 : 4);
+    if (len == 0 || len > kMaxHeader) bad("implausible .npy header length " + std::to_string(len));
+    return prefix + len;
+}
+
+NpyHeader parse_npy_preamble(std::string_view preamble) {
+    NpyHeader h;
+    h.preamble_size = npy_preamble_size(preamble);
+    if (h.preamble_size != preamble.size())
+        bad("the .npy preamble given is " + std::to_string(preamble.size()) + " bytes, its header says " +
+            std::to_string(h.preamble_size));
+    h.major = static_cast<unsigned char>(preamble[6]);
+    h.minor = static_cast<unsigned char>(preamble[7]);
+    const std::size_t prefix = h.major == 1 ? 10 : 12;
+    DictParser(preamble.substr(prefix)).parse(h);
+    parse_descr(h);
+    for (std::uint64_t s : h.shape) {
+        if (s != 0 && h.count > std::numeric_limits<std::uint64_t>::max() / s) bad("implausible shape");
+        h.count *= s;
+    }
+    return h;
+}
+
+}  // namespace ltm::io
