@@ -185,7 +185,7 @@ Real parse_real(const std::string& s, double& out) {
         return Real::Invalid;
     }
     out = negative ? -v : v;
-    return std::isfinite(out) ? Real::Number : Real::Infinite;
+    return std::isfinite(out) ? Real::Number : Real::Overflow;
 }
 
 bool is_infinity_word(const std::string& s) {
@@ -271,6 +271,9 @@ double Reader::number(const YAML::Node& v, Loc at, const std::string& path, bool
         case Real::NaN:
             fail(at, path, fmt::format("expected {}, got {} (not a number)", allow_inf ? expected : "a finite number",
                                        describe(v)));
+        case Real::Overflow:
+            fail(at, path, fmt::format("{} is beyond the range of a double (about 1.8e308){}", v.Scalar(),
+                                       allow_inf ? "; write inf for an infinite value" : ""));
         case Real::Invalid: break;
     }
     fail(at, path, fmt::format("expected {}, got {}", expected, describe(v)));

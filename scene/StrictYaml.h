@@ -101,9 +101,10 @@ std::string join_keys(const std::vector<std::string>& keys);
 // Scalars
 
 // YAML 1.2 core-schema floats and integers, plus the spellings of infinity people write
-// (inf, +inf, -inf, .inf, -.inf, Infinity; case-insensitive). Out-of-range magnitudes round to
-// +-inf or 0 as strtod does.
-enum class Real { Number, Infinite, NaN, Invalid };
+// (inf, +inf, -inf, .inf, -.inf, Infinity; case-insensitive). A finite number whose magnitude is
+// beyond the largest double (1e400) is Overflow, never silently infinity: only the words mean
+// inf. Magnitudes below the smallest double round to it or to 0, as strtod does; -0 is 0.
+enum class Real { Number, Infinite, NaN, Overflow, Invalid };
 Real parse_real(const std::string& s, double& out);
 // The word is one of the spellings of (signed) infinity above.
 bool is_infinity_word(const std::string& s);

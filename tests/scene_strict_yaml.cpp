@@ -82,6 +82,22 @@ TEST(StrictYaml, WrongTypes) {
     EXPECT_EQ(error_of("scene:\ncount: 3\n"), "spec.yaml:1:1: scene: expected a mapping, got an empty value");
 }
 
+// A number beyond the largest double (about 1.797e308) is refused, never rounded to infinity:
+// only the words mean inf (a radius of 1e400 would otherwise silently become a flat face).
+// Below the smallest subnormal (4.9e-324) numbers round to 0, as strtod does; -0 reads as 0.
+TEST(StrictYaml, NumbersBeyondADouble) {
+    EXPECT_EQ(error_of("jitter: 1e400\n"), "spec.yaml:1:9: jitter: 1e400 is beyond the range of a double (about 1.8e308)");
+    EXPECT_EQ(error_of("jitter: -1.8e308\n"), "spec.yaml:1:9: jitter: -1.8e308 is beyond the range of a double (about 1.8e308)");
+    EXPECT_EQ(error_of("jitter: 1.7e308\nscene: {}\n").find("jitter"), std::string::npos);
+    double x = 1;
+    EXPECT_EQ(yaml::parse_real("1e-400", x), yaml::Real::Number);
+    EXPECT_EQ(x, 0.0);
+    EXPECT_EQ(yaml::parse_real("-0", x), yaml::Real::Number);
+    EXPECT_EQ(x, 0.0);
+    EXPECT_EQ(yaml::parse_real("-.inf", x), yaml::Real::Infinite);
+    EXPECT_EQ(yaml::parse_real("1e309", x), yaml::Real::Overflow);
+}
+
 TEST(StrictYaml, MissingKeyAtTheMappingThatLacksIt) {
     EXPECT_EQ(error_of("count: 3\n"), "spec.yaml:1:1: scene: missing required key 'scene'");
 }
