@@ -26,6 +26,30 @@
 
 namespace ltm::test {
 
+// ---- interoperability checks ----------------------------------------------------------------
+
+// True where LTM_REQUIRE_INTEROP is set (to anything but "" or "0"): scripts/test sets it after
+// installing the tools the interoperability checks run (scipy, numpy, meshio, MeshLab), so there
+// a missing tool is a failure, not a skip that could hide a broken check.
+inline bool interop_required() {
+    const char* v = std::getenv("LTM_REQUIRE_INTEROP");
+    return v && *v && std::string(v) != "0";
+}
+
+}  // namespace ltm::test
+
+// Ends an interoperability test whose tool is missing: a skip on a developer's machine, a fatal
+// failure under LTM_REQUIRE_INTEROP. Streams like GTEST_SKIP():
+//   if (!python_has_scipy()) LTM_INTEROP_SKIP() << "python3 cannot import scipy.sparse";
+#define LTM_INTEROP_SKIP()                                                                                    \
+    return GTEST_MESSAGE_(::ltm::test::interop_required()                                                     \
+                              ? "interoperability tool missing, and LTM_REQUIRE_INTEROP is set"               \
+                              : "Skipped",                                                                    \
+                          ::ltm::test::interop_required() ? ::testing::TestPartResult::kFatalFailure          \
+                                                          : ::testing::TestPartResult::kSkip)
+
+namespace ltm::test {
+
 // ---- files ---------------------------------------------------------------------------------
 
 // The whole content of file `p`, byte for byte ("" when it cannot be read).

@@ -289,7 +289,7 @@ TEST_F(Dataset, BadInputIsLocatedExitsWithTwoAndWritesNothing) {
 
 TEST_F(Dataset, TheNumpyLoaderReadsSamplesAndTheCocoMasksAgree) {
     whole("full");
-    if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3";
+    if (!fs::exists("/usr/bin/python3")) LTM_INTEROP_SKIP() << "no /usr/bin/python3";
     // An independent decoder of COCO's compressed RLE (rleFrString, maskApi.c) and the checks.
     spit(dir / "check.py", R"PY(
 import json, sys

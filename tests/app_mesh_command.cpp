@@ -134,7 +134,7 @@ TEST_F(MeshCommand, FailureLeavesAnExistingFileUntouched) {
 TEST_F(MeshCommand, MeshLabSeesClosedManifoldsWithTheExpectedComponents) {
     for (const char* exe : {"meshlabserver", "xvfb-run", "timeout"})
         if (ltm::test::run_shell(std::string("command -v ") + exe, dir).status != 0)
-            GTEST_SKIP() << exe << " is not on PATH: MeshLab check skipped";
+            LTM_INTEROP_SKIP() << exe << " is not on PATH: MeshLab check skipped";
     std::ofstream(dir / "topology.mlx") << "<!DOCTYPE FilterScript>\n<FilterScript>\n"
                                            " <filter name=\"Compute Topological Measures\"/>\n</FilterScript>\n";
     const std::pair<const char*, long> cases[] = {{"default.yaml", 4}, {"examples/pit.yaml", 1}, {"examples/particle.yaml", 3}};

@@ -199,7 +199,7 @@ TEST_F(RenderCommand, WritesTheMatrixAndTheRunRecord) {
     }
 
     // Then the contract's reader: scipy.sparse.load_npz, and Python's json for run.json.
-    if (!python_has_scipy(dir)) GTEST_SKIP() << kPython << " cannot import numpy and scipy.sparse";
+    if (!python_has_scipy(dir)) LTM_INTEROP_SKIP() << kPython << " cannot import numpy and scipy.sparse";
     const fs::path script = write("check.py", kCheckScript);
     const Outcome py = run_shell(std::string(kPython) + " '" + script.string() + "' '" + (out / "ltm.npz").string() +
                                      "' '" + (out / "run.json").string() + "' " + std::to_string(kM * kN) + " " +
@@ -221,7 +221,7 @@ TEST_F(RenderCommand, NumpyReadsTheFeaturesAndThePatternImageWithTheExrsValues) 
         for (int q = 0; q < kQ; ++q) codes.push_back(static_cast<std::uint8_t>((7 * p + 3 * q) % 256));
     write_gray_png(png, kQ, kP, codes);
     ASSERT_EQ(ltmsim(render(scene, pat, "--threads 2 --pattern '" + png.string() + "'"), dir).status, 0);
-    if (!python_has_scipy(dir)) GTEST_SKIP() << kPython << " cannot import numpy";
+    if (!python_has_scipy(dir)) LTM_INTEROP_SKIP() << kPython << " cannot import numpy";
     const fs::path script = write("dump.py", R"PY(
 import sys
 import numpy as np

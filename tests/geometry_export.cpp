@@ -5,6 +5,8 @@
 #include "geometry/MeshExport.h"
 
 #include <gtest/gtest.h>
+
+#include "tests/TestSupport.h"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -420,7 +422,7 @@ bool on_path(const std::string& exe) {
 // (a non-manifold mesh says "Mesh has N non two manifold edges ..." instead of "two-manifold").
 TEST_F(MeshExport, MeshLabSeesTwoClosedManifoldComponentsWithRoleColours) {
     for (const char* exe : {"meshlabserver", "xvfb-run", "timeout"})
-        if (!on_path(exe)) GTEST_SKIP() << exe << " is not on PATH: MeshLab check skipped";
+        if (!on_path(exe)) LTM_INTEROP_SKIP() << exe << " is not on PATH: MeshLab check skipped";
 
     TriMesh mesh = octahedron(kOctaTags);
     mesh.append(octahedron({4, 4, 1, 1, 0, 2, 3, 3}, {5, 0, 0}));

@@ -68,7 +68,7 @@ const std::string& scipy_missing() {
 }
 #define REQUIRE_SCIPY()                                          \
     do {                                                         \
-        if (!scipy_missing().empty()) GTEST_SKIP() << scipy_missing(); \
+        if (!scipy_missing().empty()) LTM_INTEROP_SKIP() << scipy_missing(); \
     } while (0)
 
 std::vector<std::string> lines_of(const std::string& s) {

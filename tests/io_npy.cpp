@@ -78,7 +78,7 @@ TEST(Npy, PreambleIsNumpysVersion1Header) {
 TEST(Npy, PreambleIsByteForByteWhatNumpySaves) {
     const char* python = "/usr/bin/python3";
     if (::access(python, X_OK) != 0 || std::system((std::string(python) + " -c 'import numpy' 2>/dev/null").c_str()) != 0)
-        GTEST_SKIP() << python << " cannot import numpy";
+        LTM_INTEROP_SKIP() << python << " cannot import numpy";
     const std::string script =
         "import io, sys, numpy as np\n"
         "for dt, shape in (('<f4', (3, 4)), ('<i8', (5,)), ('|S3', ()), ('>u2', (2, 0, 7)), ('<f8', (70001,)),"

@@ -61,7 +61,7 @@ const std::string& numpy_missing() {
 }
 #define REQUIRE_NUMPY()                                                \
     do {                                                               \
-        if (!numpy_missing().empty()) GTEST_SKIP() << numpy_missing(); \
+        if (!numpy_missing().empty()) LTM_INTEROP_SKIP() << numpy_missing(); \
     } while (0)
 
 std::vector<std::string> lines_of(const std::string& s) {

@@ -45,7 +45,9 @@ defects:
         EXPECT_EQ(b.solid.surfaces[p.tags[0]].name, "front");
         EXPECT_EQ(b.solid.surfaces[p.tags[1]].name, "bubble 0");
         // The glass between them: 1 um on the axis (the vertex at -3, the bubble's top at -2.999).
-        if (x == 0.0) EXPECT_NEAR(p.vertices[1].z - p.vertices[0].z, 1e-3, 1e-12);
+        if (x == 0.0) {
+            EXPECT_NEAR(p.vertices[1].z - p.vertices[0].z, 1e-3, 1e-12);
+        }
     }
     expect_validates(b, "1 um under the surface");
 }
