@@ -82,17 +82,17 @@ struct Label {
 // Tick values for an axis over [lo, hi]: every multiple k * step in [lo, hi] (ends included, to
 // 1e-9 of a step), step = m * 10^e with m in {1, 2, 2.5, 5}: the smallest such step that gives
 // at most max_ticks ticks (max_ticks < 2 counts as 2; if that step gives fewer than 2 ticks, the
-// next smaller one). Values are k * m * 10^e computed so that decimal ticks are the doubles
+// next smaller one) among the steps >= min_step (e.g. 1 for whole numbers). Values are k * m * 10^e computed so that decimal ticks are the doubles
 // nearest to them (0.3, not 0.30000000000000004), and 0 is exactly 0. lo > hi, or a non-finite
 // bound, is std::invalid_argument; lo == hi gives that one value.
 // Examples: [0, 1] at most 6: 0, 0.2, 0.4, 0.6, 0.8, 1; at most 5: 0, 0.25, 0.5, 0.75, 1;
 // [-12.5, 12.5] at most 9: -10, -5, 0, 5, 10.
-std::vector<double> nice_ticks(double lo, double hi, int max_ticks);
+std::vector<double> nice_ticks(double lo, double hi, int max_ticks, double min_step = 0);
 
 // Labels for ticks from nice_ticks (evenly spaced): fixed-point with just the decimals the
-// spacing needs ("0", "0.25", "0.5"), or, when the largest magnitude is >= 1e5 or the spacing
-// < 1e-4, format_tick with enough digits to tell neighbours apart ("1.5e6"). Negative values get
-// a real minus sign (U+2212, "−10").
+// spacing needs ("0.00", "0.25", "0.50"; "25000"), or, when the largest magnitude is >= 1e6 or
+// the spacing < 1e-4, format_tick with enough digits to tell neighbours apart ("1.5e6").
+// Negative values get a real minus sign (U+2212, "−10").
 std::vector<std::string> tick_labels(const std::vector<double>& ticks);
 
 // Compact value labels: printf "%.3g" (significant_digits, clamped to 1 - 17), with the exponent
@@ -128,17 +128,18 @@ constexpr int kPlotTickSpacing = 50;   // an axis of length n gets at most n / 5
 //                while neighbouring labels would come closer than kPlotTickLabelGap; if even 2
 //                are too close, only the ticks whose labels clear the last one kept are kept.
 //   axes         (only when the extent is known) ticks in mm over the extent below the frame (x)
-//                and left of it (y), kPlotTick-
-//                Length long, labels centred under / beside them kPlotTickLabelGap further out,
-//                and the axis labels "x (mm)" centred below the x tick labels and "y (mm)"
-//                (vertical) left of the y tick labels, kPlotAxisLabelGap further out. x tick at
-//                value v: column image_x + (v + width_mm / 2) / width_mm * image_w; y tick: row
-//                image_y + (height_mm / 2 - v) / height_mm * image_h.
+//                and left of it (y), kPlotTickLength long, labels centred under / beside them
+//                kPlotTickLabelGap further out, and the axis labels "x (mm)" centred below the x
+//                tick labels and "y (mm)" (vertical) left of the y tick labels, kPlotAxisLabelGap
+//                further out. x tick at value v: column image_x + (v + width_mm / 2) / width_mm *
+//                image_w; y tick: row image_y + (height_mm / 2 - v) / height_mm * image_h.
 //   colour bar   kPlotBarWidth by bar_h = max(image_h, kPlotMinBarHeight) at bar_x = image_x +
 //                image_w + kPlotBarGap, bar_y = image_y, framed like the image; bar row r shows
 //                t = 1 - r / (bar_h - 1): exactly the colour of hi on top, of lo at the bottom.
-//                Ticks over [lo, hi] (the bar's length taken as bar_h - 1) right of it at row bar_y + (hi - v) / (hi - lo) * (bar_h - 1) + 0.5, labels vertically
-//                centred on them.
+//                Ticks over [lo, hi] (the axis taken as bar_h - 1 long) right of it at row
+//                bar_y + (hi - v) / (hi - lo) * (bar_h - 1) + 0.5 (the centre line of the row
+//                showing v), labels vertically centred on them; steps of at least 1 when lo, hi
+//                and every finite value are whole numbers (counts, indices, masks).
 //   title        centred over the image, kPlotTitleGap above the frame and every other label
 //                (none when empty).
 // Everything drawn (the frames included) is then shifted so that its bounding box starts
@@ -215,8 +216,7 @@ constexpr int kHistogramWidth = 640, kHistogramHeight = 400;
 // left of and below it), one bar per bin (bars[b] over bin b, left to right, bins equally wide;
 // a count c reaches up to row plot.y + plot.h - c / y_max * plot.h), the ticks and every label.
 // y: counts from 0 to y_max = the last y tick; the y ticks are nice_ticks over [0, largest count]
-// (at most 8; whole numbers: steps below 1 become every count), one step more if the largest
-// count is above the last. x: nice_ticks over the bins' range (at most 8), or with log_x the
+// (at most 8, steps of at least 1), one step more if the largest count is above the last. x: nice_ticks over the bins' range (at most 8), or with log_x the
 // powers of ten inside it (if fewer than 2: 1, 2 and 5 times powers of ten; if still fewer:
 // nice_ticks of the values), placed at log10 of the value. Labels: the title centred on top
 // (kTitleFontSize), tick labels under / left of their ticks (kTickFontSize), the x label centred

@@ -236,6 +236,12 @@ TEST(Ticks, HandDerivedCases) {
     EXPECT_EQ(ltm::nice_ticks(2e-5, 9e-5, 4), (V{2e-5, 4e-5, 6e-5, 8e-5}));
     // at most 2 on [0.1, 0.9]: 0.5 leaves only one tick, so the next smaller step (0.25) is used
     EXPECT_EQ(ltm::nice_ticks(0.1, 0.9, 2), (V{0.25, 0.5, 0.75}));
+    // whole numbers: [0, 3] at most 8 would step by 0.5 (7 ticks); with steps >= 1, by 1
+    EXPECT_EQ(ltm::nice_ticks(0, 3, 8), (V{0, 0.5, 1, 1.5, 2, 2.5, 3}));
+    EXPECT_EQ(ltm::nice_ticks(0, 3, 8, 1), (V{0, 1, 2, 3}));
+    EXPECT_EQ(ltm::nice_ticks(0, 1, 2, 1), (V{0, 1}));
+    EXPECT_EQ(ltm::nice_ticks(21, 48, 30, 1), (V{21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38,
+                                                 39, 40, 41, 42, 43, 44, 45, 46, 47, 48}));
     // one value
     EXPECT_EQ(ltm::nice_ticks(3, 3, 5), (V{3}));
     EXPECT_THROW(ltm::nice_ticks(1, 0, 5), std::invalid_argument);
@@ -273,6 +279,7 @@ TEST(Ticks, Labels) {
     EXPECT_EQ(ltm::tick_labels({-0.3, 0, 0.3}), (S{kMinus + "0.3", "0.0", "0.3"}));
     EXPECT_EQ(ltm::tick_labels({1000, 1000.1, 1000.2}), (S{"1000.0", "1000.1", "1000.2"}));
     EXPECT_EQ(ltm::tick_labels({0, 1e6, 2e6}), (S{"0", "1e6", "2e6"}));
+    EXPECT_EQ(ltm::tick_labels({0, 50000, 100000, 150000}), (S{"0", "50000", "100000", "150000"}));  // below 1e6: in full
     EXPECT_EQ(ltm::tick_labels({2e-5, 4e-5}), (S{"2e" + kMinus + "5", "4e" + kMinus + "5"}));
     EXPECT_EQ(ltm::tick_labels({1.5e6, 1.6e6}), (S{"1.5e6", "1.6e6"}));
     EXPECT_TRUE(ltm::tick_labels({}).empty());
@@ -479,6 +486,26 @@ TEST(PseudoColour, FiguresAreCleanAtManySizes) {
                 // bar labels tell neighbours apart
                 for (std::size_t i = 1; i < L.tick_labels.size(); ++i) EXPECT_NE(L.tick_labels[i], L.tick_labels[i - 1]);
             }
+}
+
+TEST(PseudoColour, WholeNumbersGetWholeNumberTicks) {
+    // a mask with values 0 .. 3 on a 160-row bar: at most 159 / 50 + 1 = 4 ticks; 0.5 would give
+    // 7, 1 gives 4
+    std::vector<float> mask(40 * 40, 0.0f);
+    mask[5] = 1, mask[50] = 2, mask[500] = 3;
+    const auto L = ltm::pseudo_colour_layout(mask, 40, 40, "mask", 0.0, 3.0, 4);
+    EXPECT_EQ(L.tick_values, (std::vector<double>{0, 1, 2, 3}));
+    // one value off a whole number: steps of 0.5 are allowed again (at most 4: 1 gives 4 too, so
+    // the same ticks); a range off whole numbers likewise
+    mask[7] = 0.5f;
+    EXPECT_EQ(ltm::pseudo_colour_layout(mask, 40, 40, "mask", 0.0, 3.0, 4).tick_values, (std::vector<double>{0, 1, 2, 3}));
+    EXPECT_EQ(ltm::pseudo_colour_layout(mask, 40, 40, "mask", 0.0, 1.5, 4).tick_values,
+              (std::vector<double>{0, 0.5, 1, 1.5}));
+    mask[7] = 0;
+    EXPECT_EQ(ltm::pseudo_colour_layout(mask, 40, 40, "mask", 0.0, 1.0, 4).tick_values, (std::vector<double>{0, 1}));
+    mask[7] = 0.25f;
+    EXPECT_EQ(ltm::pseudo_colour_layout(mask, 40, 40, "mask", 0.0, 1.0, 4).tick_values,
+              (std::vector<double>{0, 0.5, 1}));
 }
 
 TEST(PseudoColour, NanRangeUsesTheFiniteMinimumAndMaximum) {
