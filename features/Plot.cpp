@@ -13,7 +13,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
-#include <memory>
 #include <stdexcept>
 #include <tuple>
 
@@ -230,7 +229,7 @@ public:
         cairo_save(cr_);
         if (l.vertical) {
             cairo_translate(cr_, l.box.x + ascent, l.box.y + l.box.h);
-            cairo_rotate(cr_, -M_PI / 2);
+            cairo_rotate(cr_, -std::acos(0.0));  // a quarter turn counter-clockwise
             cairo_move_to(cr_, 0, 0);
         } else {
             cairo_move_to(cr_, l.box.x, l.box.y + ascent);
