@@ -323,14 +323,14 @@ struct AxisTicks {
 };
 
 template <class Extent>
-AxisTicks axis_ticks(double lo, double hi, double length, const Extent& extent, double min_step = 0) {
+AxisTicks axis_ticks(double lo, double hi, double length, const Extent& extent, bool whole_steps = false) {
     auto position = [&](double v) { return hi > lo ? (v - lo) / (hi - lo) * length : 0.0; };
     auto apart = [&](double a, const std::string& la, double b, const std::string& lb) {
         return std::fabs(position(b) - position(a)) >= (extent(la) + extent(lb)) / 2 + kPlotTickLabelGap;
     };
     AxisTicks t;
     for (int n = static_cast<int>(length) / kPlotTickSpacing + 1; n >= 2; --n) {
-        t.values = nice_ticks(lo, hi, n, min_step);
+        t.values = nice_ticks(lo, hi, n, whole_steps);
         t.labels = tick_labels(t.values);
         bool fits = true;
         for (std::size_t i = 1; i < t.values.size() && fits; ++i)
@@ -400,7 +400,7 @@ int text_height(double size) {
 
 // ---- ticks ----
 
-std::vector<double> nice_ticks(double lo, double hi, int max_ticks, double min_step) {
+std::vector<double> nice_ticks(double lo, double hi, int max_ticks, bool whole_steps) {
     if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi)
         throw std::invalid_argument("nice_ticks: the range [" + format_tick(lo, 9) + ", " + format_tick(hi, 9) +
                                     "] must be finite with lo <= hi");
@@ -440,7 +440,7 @@ std::vector<double> nice_ticks(double lo, double hi, int max_ticks, double min_s
     for (;; ++e) {
         for (const long long m : {10LL, 20LL, 25LL, 50LL}) {
             const Step s{m, e};
-            if (step_value(s) < min_step * (1 - 1e-12)) continue;
+            if (whole_steps && (e < -1 || (e == -1 && m == 25))) continue;  // steps below 1, and 2.5
             const double count = count_of(s);
             if (count <= n) return count >= 2 || previous.mantissa == 0 ? ticks_of(s) : ticks_of(previous);
             previous = s;
@@ -556,7 +556,7 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
         bool whole = std::floor(L.lo) == L.lo && std::floor(L.hi) == L.hi;
         for (std::size_t k = 0; k < values.size() && whole; ++k)
             whole = !std::isfinite(values[k]) || std::floor(values[k]) == values[k];
-        AxisTicks bar = axis_ticks(L.lo, L.hi, L.bar_h - 1.0, along_y, whole ? 1.0 : 0.0);
+        AxisTicks bar = axis_ticks(L.lo, L.hi, L.bar_h - 1.0, along_y, whole);
         L.tick_values = std::move(bar.values);
         L.tick_labels = std::move(bar.labels);
     }
@@ -775,7 +775,7 @@ HistogramLayout histogram_layout(const std::vector<double>& values, int bins, co
     const int out = 1 + kPlotTickLength + kPlotTickLabelGap;
 
     // y: counts 0 .. y_max, whole numbers.
-    L.y_ticks = nice_ticks(0, static_cast<double>(std::max(1L, peak)), 8, 1.0);
+    L.y_ticks = nice_ticks(0, static_cast<double>(std::max(1L, peak)), 8, true);
     if (L.y_ticks.back() < peak) L.y_ticks.push_back(L.y_ticks.back() + (L.y_ticks[1] - L.y_ticks[0]));
     L.y_max = L.y_ticks.back();
 

@@ -82,12 +82,14 @@ struct Label {
 // Tick values for an axis over [lo, hi]: every multiple k * step in [lo, hi] (ends included, to
 // 1e-9 of a step), step = m * 10^e with m in {1, 2, 2.5, 5}: the smallest such step that gives
 // at most max_ticks ticks (max_ticks < 2 counts as 2; if that step gives fewer than 2 ticks, the
-// next smaller one) among the steps >= min_step (e.g. 1 for whole numbers). Values are k * m * 10^e computed so that decimal ticks are the doubles
-// nearest to them (0.3, not 0.30000000000000004), and 0 is exactly 0. lo > hi, or a non-finite
-// bound, is std::invalid_argument; lo == hi gives that one value.
+// next smaller one); with whole_steps only whole-number steps (1, 2, 5, 10, 20, 25, ...: for
+// counts, indices, masks). Values are k * m * 10^e computed so that decimal ticks are the
+// doubles nearest to them (0.3, not 0.30000000000000004), and 0 is exactly 0. lo > hi, or a
+// non-finite bound, is std::invalid_argument; lo == hi gives that one value.
 // Examples: [0, 1] at most 6: 0, 0.2, 0.4, 0.6, 0.8, 1; at most 5: 0, 0.25, 0.5, 0.75, 1;
-// [-12.5, 12.5] at most 9: -10, -5, 0, 5, 10.
-std::vector<double> nice_ticks(double lo, double hi, int max_ticks, double min_step = 0);
+// [-12.5, 12.5] at most 9: -10, -5, 0, 5, 10; [3, 16] at most 6: 5, 7.5, 10, 12.5, 15, with
+// whole steps 5, 10, 15.
+std::vector<double> nice_ticks(double lo, double hi, int max_ticks, bool whole_steps = false);
 
 // Labels for ticks from nice_ticks (evenly spaced): fixed-point with just the decimals the
 // spacing needs ("0.00", "0.25", "0.50"; "25000"), or, when the largest magnitude is >= 1e6 or
@@ -138,7 +140,7 @@ constexpr int kPlotTickSpacing = 50;   // an axis of length n gets at most n / 5
 //                t = 1 - r / (bar_h - 1): exactly the colour of hi on top, of lo at the bottom.
 //                Ticks over [lo, hi] (the axis taken as bar_h - 1 long) right of it at row
 //                bar_y + (hi - v) / (hi - lo) * (bar_h - 1) + 0.5 (the centre line of the row
-//                showing v), labels vertically centred on them; steps of at least 1 when lo, hi
+//                showing v), labels vertically centred on them; whole-number steps when lo, hi
 //                and every finite value are whole numbers (counts, indices, masks).
 //   title        centred over the image, kPlotTitleGap above the frame and every other label
 //                (none when empty).
@@ -216,7 +218,7 @@ constexpr int kHistogramWidth = 640, kHistogramHeight = 400;
 // left of and below it), one bar per bin (bars[b] over bin b, left to right, bins equally wide;
 // a count c reaches up to row plot.y + plot.h - c / y_max * plot.h), the ticks and every label.
 // y: counts from 0 to y_max = the last y tick; the y ticks are nice_ticks over [0, largest count]
-// (at most 8, steps of at least 1), one step more if the largest count is above the last. x: nice_ticks over the bins' range (at most 8), or with log_x the
+// (at most 8, whole-number steps), one step more if the largest count is above the last. x: nice_ticks over the bins' range (at most 8), or with log_x the
 // powers of ten inside it (if fewer than 2: 1, 2 and 5 times powers of ten; if still fewer:
 // nice_ticks of the values), placed at log10 of the value. Labels: the title centred on top
 // (kTitleFontSize), tick labels under / left of their ticks (kTickFontSize), the x label centred

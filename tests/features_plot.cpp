@@ -236,12 +236,18 @@ TEST(Ticks, HandDerivedCases) {
     EXPECT_EQ(ltm::nice_ticks(2e-5, 9e-5, 4), (V{2e-5, 4e-5, 6e-5, 8e-5}));
     // at most 2 on [0.1, 0.9]: 0.5 leaves only one tick, so the next smaller step (0.25) is used
     EXPECT_EQ(ltm::nice_ticks(0.1, 0.9, 2), (V{0.25, 0.5, 0.75}));
-    // whole numbers: [0, 3] at most 8 would step by 0.5 (7 ticks); with steps >= 1, by 1
+    // whole numbers: [0, 3] at most 8 would step by 0.5 (7 ticks); with whole steps, by 1
     EXPECT_EQ(ltm::nice_ticks(0, 3, 8), (V{0, 0.5, 1, 1.5, 2, 2.5, 3}));
-    EXPECT_EQ(ltm::nice_ticks(0, 3, 8, 1), (V{0, 1, 2, 3}));
-    EXPECT_EQ(ltm::nice_ticks(0, 1, 2, 1), (V{0, 1}));
-    EXPECT_EQ(ltm::nice_ticks(21, 48, 30, 1), (V{21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38,
-                                                 39, 40, 41, 42, 43, 44, 45, 46, 47, 48}));
+    EXPECT_EQ(ltm::nice_ticks(0, 3, 8, true), (V{0, 1, 2, 3}));
+    EXPECT_EQ(ltm::nice_ticks(0, 1, 2, true), (V{0, 1}));
+    EXPECT_EQ(ltm::nice_ticks(21, 48, 30, true), (V{21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37,
+                                                    38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48}));
+    // [3, 16] at most 6: 2 gives 7, 2.5 gives 5; whole steps skip 2.5, so 5 (3 ticks)
+    EXPECT_EQ(ltm::nice_ticks(3, 16, 6), (V{5, 7.5, 10, 12.5, 15}));
+    EXPECT_EQ(ltm::nice_ticks(3, 16, 6, true), (V{5, 10, 15}));
+    // 25 is a whole step, 2.5 is not
+    EXPECT_EQ(ltm::nice_ticks(0, 100, 5, true), (V{0, 25, 50, 75, 100}));
+    EXPECT_EQ(ltm::nice_ticks(0, 10, 5, true), (V{0, 5, 10}));
     // one value
     EXPECT_EQ(ltm::nice_ticks(3, 3, 5), (V{3}));
     EXPECT_THROW(ltm::nice_ticks(1, 0, 5), std::invalid_argument);
