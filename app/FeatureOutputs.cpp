@@ -107,7 +107,7 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
         }
         written.push_back(d / "features.exr");
         written.push_back(d / "features.npz");
-        write_feature_images(dir, run.features);
+        write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]});
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
                        {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}},
@@ -163,15 +163,16 @@ std::optional<std::vector<float>> read_reference(const std::string& dir, int cam
 }
 
 FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
-                             const FeatureOptions& options, const std::vector<float>* reference) {
+                             const FeatureOptions& options, const std::vector<float>* reference,
+                             const ImageExtent& camera) {
     FeatureOptions o = options;
     if (o.dark_block < 0) o.dark_block = std::min({60, g.display.P, g.display.Q});  // automatic
     const FeatureImages f = compute_features(T, g.camera_columns, g.camera_rows, g.display, o, reference);
-    write_feature_images(dir, f);
+    write_feature_images(dir, f, camera);
     return f;
 }
 
-void write_feature_images(const std::string& dir, const FeatureImages& f) {
+void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera) {
     write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);
     write_npz_channels((fs::path(dir) / "features.npz").string(), f.width, f.height, f.channels);
     const fs::path pngs = fs::path(dir) / "features";
@@ -179,7 +180,8 @@ void write_feature_images(const std::string& dir, const FeatureImages& f) {
     // Pseudo colour, scaled so a 100-pixel-wide image is ~400 pixels wide.
     const int scale = std::max(1, 400 / std::max(1, f.width));
     for (const auto& [name, values] : f.channels)
-        write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, name, NAN, NAN, scale);
+        write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, feature_title(name), NAN,
+                                NAN, scale, camera);
 }
 
 }  // namespace ltm::app

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "features/Features.h"
+#include "features/Plot.h"
 #include "scene/Scene.h"
 #include "io/CsrMatrix.h"
 #include "io/Json.h"
@@ -44,10 +45,13 @@ std::optional<std::vector<float>> read_reference(const std::string& dir, int cam
 // Computes the features and writes them (write_feature_images); returns the images. A negative
 // options.dark_block means automatic: 60 display pixels, or the display's smaller side if less.
 FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
-                             const FeatureOptions& options, const std::vector<float>* reference);
+                             const FeatureOptions& options, const std::vector<float>* reference,
+                             const ImageExtent& camera = {});
 
 // DIR/features.exr (one FLOAT channel per image), DIR/features.npz (the same channels as float32
-// arrays of shape (rows, columns), for numpy without an EXR reader) and DIR/features/<name>.png.
-void write_feature_images(const std::string& dir, const FeatureImages& f);
+// arrays of shape (rows, columns), for numpy without an EXR reader) and DIR/features/<name>.png
+// (pseudo colour titled with the channel's unit; axes in mm over `camera`, the camera's field of
+// view, when it is known).
+void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera = {});
 
 }  // namespace ltm::app

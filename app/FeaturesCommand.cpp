@@ -3,10 +3,13 @@
 // camera image for that display pattern, y = T x, as DIR/pattern.exr.
 #include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
+#include "app/JsonLine.h"
 #include "io/Image.h"
 #include "io/LtmFile.h"
 
@@ -21,6 +24,31 @@ struct FeaturesArgs {
     FeatureOptions options{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
     int threads = 0;
 };
+
+// The camera's field of view, scene.camera.size in DIR/run.json (read_render_geometry has checked
+// the file), for the previews' axes in mm; unknown (previews without axes) if it is not there.
+ImageExtent camera_extent(const std::string& dir) {
+    std::ifstream in(fs::path(dir) / "run.json");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    try {
+        const JsonValue root = parse_json_line(ss.str());
+        auto member = [](const JsonValue& v, const char* key) -> const JsonValue* {
+            if (v.type == JsonValue::Type::Object)
+                for (const auto& [k, x] : v.object)
+                    if (k == key) return &x;
+            return nullptr;
+        };
+        const JsonValue* scene = member(root, "scene");
+        const JsonValue* camera = scene ? member(*scene, "camera") : nullptr;
+        const JsonValue* size = camera ? member(*camera, "size") : nullptr;
+        if (size && size->type == JsonValue::Type::Array && size->array.size() == 2 &&
+            size->array[0].type == JsonValue::Type::Number && size->array[1].type == JsonValue::Type::Number)
+            return {size->array[0].number, size->array[1].number};
+    } catch (const JsonError&) {
+    }
+    return {};
+}
 
 int run(const FeaturesArgs& a) {
     // Everything is read and checked before anything is written.
@@ -65,7 +93,7 @@ int run(const FeaturesArgs& a) {
         std::cerr << "ltmsim features: " << e.what() << "\n";
         return 2;
     }
-    write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr);
+    write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr, camera_extent(a.dir));
     if (!pattern.empty()) {
         const std::vector<double> y = apply_pattern(T, pattern);
         write_exr((fs::path(a.dir) / "pattern.exr").string(), g.camera_columns, g.camera_rows,

@@ -257,6 +257,27 @@ const std::vector<std::string>& feature_channel_names(bool with_reference) {
     return with_reference ? all : without;
 }
 
+std::string feature_unit(const std::string& channel) {
+    static const std::vector<std::pair<std::string, std::string>> units = {
+        {"BrightField", "fraction"},         {"DarkField", "fraction"},
+        {"ScatterCount", "count"},           {"ScatterWidth", "index"},
+        {"ScatterRows", "display pixels"},   {"ScatterColumns", "display pixels"},
+        {"ScatterDiameter", "display pixels"}, {"EllipseMajor", "display pixels"},
+        {"EllipseMinor", "display pixels"},  {"EllipseAngle", "degrees"},
+        {"RobustScatterCount", "count"},     {"RobustScatterDiameter", "display pixels"},
+        {"MeanX", "mm"},                     {"MeanY", "mm"},
+        {"DeflectionX", "mm"},               {"DeflectionY", "mm"},
+        {"Deflection", "mm"}};
+    for (const auto& [name, unit] : units)
+        if (name == channel) return unit;
+    return "";
+}
+
+std::string feature_title(const std::string& channel) {
+    const std::string unit = feature_unit(channel);
+    return unit.empty() ? channel : channel + " (" + unit + ")";
+}
+
 const std::vector<float>& FeatureImages::channel(const std::string& name) const {
     for (const auto& c : channels)
         if (c.first == name) return c.second;

@@ -93,6 +93,13 @@ struct FeatureImages {
 // at the end).
 const std::vector<std::string>& feature_channel_names(bool with_reference);
 
+// The unit of a channel's values, as docs/features.md lists it ("fraction", "count", "index",
+// "display pixels", "degrees", "mm"); "" for a name that is not a feature channel.
+std::string feature_unit(const std::string& channel);
+
+// A figure title for a channel: "ScatterCount (count)"; the bare name if it has no unit.
+std::string feature_title(const std::string& channel);
+
 // All features of every row of T (see above). camera_columns = N, camera_rows = M.
 // reference_mean (optional): 2 floats per camera pixel, (x, y) in mm, in camera pixel order, the
 // mean display position of the defect-free object's row (NaN where that row is empty).

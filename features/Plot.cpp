@@ -1,10 +1,17 @@
-// Plot.h: viridis, a built-in bitmap font, pseudo-colour images with a colour bar, montages.
+// Plot.h: viridis, pseudo-colour images with a colour bar and axes, montages, histograms; lines
+// and text drawn with Cairo, the font loaded from its file through FreeType.
 #include "features/Plot.h"
+
+#include <cairo-ft.h>
+#include <cairo.h>
+#include <ft2build.h>
+#include FT_FREETYPE_H
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 #include <tuple>
@@ -104,195 +111,248 @@ const std::array<Rgb, 256> kViridis = {{
     {0.993248f, 0.906157f, 0.143936f},
 }};
 
-// ---- font ----
-// One line per glyph: up to 8 rows of 5 pixels ('#' set), rows 0 - 6 above the baseline, row 7
-// the descender; missing rows are blank.
-struct GlyphArt {
-    char c;
-    const char* rows[8];
-};
 
-const GlyphArt kGlyphArt[] = {
-    {' ', {".....", ".....", ".....", ".....", ".....", ".....", "....."}},
-    {'!', {"..#..", "..#..", "..#..", "..#..", "..#..", ".....", "..#.."}},
-    {'"', {".#.#.", ".#.#.", ".#.#."}},
-    {'#', {".#.#.", ".#.#.", "#####", ".#.#.", "#####", ".#.#.", ".#.#."}},
-    {'$', {"..#..", ".####", "#.#..", ".###.", "..#.#", "####.", "..#.."}},
-    {'%', {"##...", "##..#", "...#.", "..#..", ".#...", "#..##", "...##"}},
-    {'&', {".##..", "#..#.", "#.#..", ".#...", "#.#.#", "#..#.", ".##.#"}},
-    {'\'', {"..#..", "..#..", ".#..."}},
-    {'(', {"...#.", "..#..", ".#...", ".#...", ".#...", "..#..", "...#."}},
-    {')', {".#...", "..#..", "...#.", "...#.", "...#.", "..#..", ".#..."}},
-    {'*', {".....", "..#..", "#.#.#", ".###.", "#.#.#", "..#..", "....."}},
-    {'+', {".....", "..#..", "..#..", "#####", "..#..", "..#..", "....."}},
-    {',', {".....", ".....", ".....", ".....", ".....", ".##..", "..#..", ".#..."}},
-    {'-', {".....", ".....", ".....", "#####", ".....", ".....", "....."}},
-    {'.', {".....", ".....", ".....", ".....", ".....", ".##..", ".##.."}},
-    {'/', {".....", "....#", "...#.", "..#..", ".#...", "#....", "....."}},
-    {'0', {".###.", "#...#", "#..##", "#.#.#", "##..#", "#...#", ".###."}},
-    {'1', {"..#..", ".##..", "..#..", "..#..", "..#..", "..#..", ".###."}},
-    {'2', {".###.", "#...#", "....#", "...#.", "..#..", ".#...", "#####"}},
-    {'3', {"#####", "...#.", "..#..", "...#.", "....#", "#...#", ".###."}},
-    {'4', {"...#.", "..##.", ".#.#.", "#..#.", "#####", "...#.", "...#."}},
-    {'5', {"#####", "#....", "####.", "....#", "....#", "#...#", ".###."}},
-    {'6', {"..##.", ".#...", "#....", "####.", "#...#", "#...#", ".###."}},
-    {'7', {"#####", "....#", "...#.", "..#..", ".#...", ".#...", ".#..."}},
-    {'8', {".###.", "#...#", "#...#", ".###.", "#...#", "#...#", ".###."}},
-    {'9', {".###.", "#...#", "#...#", ".####", "....#", "...#.", ".##.."}},
-    {':', {".....", ".##..", ".##..", ".....", ".##..", ".##..", "....."}},
-    {';', {".....", ".##..", ".##..", ".....", ".##..", "..#..", ".#..."}},
-    {'<', {"...#.", "..#..", ".#...", "#....", ".#...", "..#..", "...#."}},
-    {'=', {".....", ".....", "#####", ".....", "#####", ".....", "....."}},
-    {'>', {".#...", "..#..", "...#.", "....#", "...#.", "..#..", ".#..."}},
-    {'?', {".###.", "#...#", "....#", "...#.", "..#..", ".....", "..#.."}},
-    {'@', {".###.", "#...#", "....#", ".##.#", "#.#.#", "#.#.#", ".###."}},
-    {'A', {".###.", "#...#", "#...#", "#####", "#...#", "#...#", "#...#"}},
-    {'B', {"####.", "#...#", "#...#", "####.", "#...#", "#...#", "####."}},
-    {'C', {".###.", "#...#", "#....", "#....", "#....", "#...#", ".###."}},
-    {'D', {"###..", "#..#.", "#...#", "#...#", "#...#", "#..#.", "###.."}},
-    {'E', {"#####", "#....", "#....", "####.", "#....", "#....", "#####"}},
-    {'F', {"#####", "#....", "#....", "####.", "#....", "#....", "#...."}},
-    {'G', {".###.", "#...#", "#....", "#.###", "#...#", "#...#", ".####"}},
-    {'H', {"#...#", "#...#", "#...#", "#####", "#...#", "#...#", "#...#"}},
-    {'I', {".###.", "..#..", "..#..", "..#..", "..#..", "..#..", ".###."}},
-    {'J', {"..###", "...#.", "...#.", "...#.", "...#.", "#..#.", ".##.."}},
-    {'K', {"#...#", "#..#.", "#.#..", "##...", "#.#..", "#..#.", "#...#"}},
-    {'L', {"#....", "#....", "#....", "#....", "#....", "#....", "#####"}},
-    {'M', {"#...#", "##.##", "#.#.#", "#.#.#", "#...#", "#...#", "#...#"}},
-    {'N', {"#...#", "#...#", "##..#", "#.#.#", "#..##", "#...#", "#...#"}},
-    {'O', {".###.", "#...#", "#...#", "#...#", "#...#", "#...#", ".###."}},
-    {'P', {"####.", "#...#", "#...#", "####.", "#....", "#....", "#...."}},
-    {'Q', {".###.", "#...#", "#...#", "#...#", "#.#.#", "#..#.", ".##.#"}},
-    {'R', {"####.", "#...#", "#...#", "####.", "#.#..", "#..#.", "#...#"}},
-    {'S', {".####", "#....", "#....", ".###.", "....#", "....#", "####."}},
-    {'T', {"#####", "..#..", "..#..", "..#..", "..#..", "..#..", "..#.."}},
-    {'U', {"#...#", "#...#", "#...#", "#...#", "#...#", "#...#", ".###."}},
-    {'V', {"#...#", "#...#", "#...#", "#...#", "#...#", ".#.#.", "..#.."}},
-    {'W', {"#...#", "#...#", "#...#", "#.#.#", "#.#.#", "#.#.#", ".#.#."}},
-    {'X', {"#...#", "#...#", ".#.#.", "..#..", ".#.#.", "#...#", "#...#"}},
-    {'Y', {"#...#", "#...#", ".#.#.", "..#..", "..#..", "..#..", "..#.."}},
-    {'Z', {"#####", "....#", "...#.", "..#..", ".#...", "#....", "#####"}},
-    {'[', {".###.", ".#...", ".#...", ".#...", ".#...", ".#...", ".###."}},
-    {'\\', {".....", "#....", ".#...", "..#..", "...#.", "....#", "....."}},
-    {']', {".###.", "...#.", "...#.", "...#.", "...#.", "...#.", ".###."}},
-    {'^', {"..#..", ".#.#.", "#...#"}},
-    {'_', {".....", ".....", ".....", ".....", ".....", ".....", ".....", "#####"}},
-    {'`', {".#...", "..#.."}},
-    {'a', {".....", ".....", ".###.", "....#", ".####", "#...#", ".####"}},
-    {'b', {"#....", "#....", "#.##.", "##..#", "#...#", "#...#", "####."}},
-    {'c', {".....", ".....", ".###.", "#....", "#....", "#...#", ".###."}},
-    {'d', {"....#", "....#", ".##.#", "#..##", "#...#", "#...#", ".####"}},
-    {'e', {".....", ".....", ".###.", "#...#", "#####", "#....", ".###."}},
-    {'f', {"..##.", ".#..#", ".#...", "###..", ".#...", ".#...", ".#..."}},
-    {'g', {".....", ".....", ".####", "#...#", "#...#", ".####", "....#", ".###."}},
-    {'h', {"#....", "#....", "#.##.", "##..#", "#...#", "#...#", "#...#"}},
-    {'i', {"..#..", ".....", ".##..", "..#..", "..#..", "..#..", ".###."}},
-    {'j', {"...#.", ".....", "..##.", "...#.", "...#.", "...#.", "#..#.", ".##.."}},
-    {'k', {"#....", "#....", "#..#.", "#.#..", "##...", "#.#..", "#..#."}},
-    {'l', {".##..", "..#..", "..#..", "..#..", "..#..", "..#..", ".###."}},
-    {'m', {".....", ".....", "##.#.", "#.#.#", "#.#.#", "#...#", "#...#"}},
-    {'n', {".....", ".....", "#.##.", "##..#", "#...#", "#...#", "#...#"}},
-    {'o', {".....", ".....", ".###.", "#...#", "#...#", "#...#", ".###."}},
-    {'p', {".....", ".....", "####.", "#...#", "#...#", "####.", "#....", "#...."}},
-    {'q', {".....", ".....", ".####", "#...#", "#...#", ".####", "....#", "....#"}},
-    {'r', {".....", ".....", "#.##.", "##..#", "#....", "#....", "#...."}},
-    {'s', {".....", ".....", ".####", "#....", ".###.", "....#", "####."}},
-    {'t', {".#...", ".#...", "###..", ".#...", ".#...", ".#..#", "..##."}},
-    {'u', {".....", ".....", "#...#", "#...#", "#...#", "#..##", ".##.#"}},
-    {'v', {".....", ".....", "#...#", "#...#", "#...#", ".#.#.", "..#.."}},
-    {'w', {".....", ".....", "#...#", "#...#", "#.#.#", "#.#.#", ".#.#."}},
-    {'x', {".....", ".....", "#...#", ".#.#.", "..#..", ".#.#.", "#...#"}},
-    {'y', {".....", ".....", "#...#", "#...#", "#...#", ".####", "....#", ".###."}},
-    {'z', {".....", ".....", "#####", "...#.", "..#..", ".#...", "#####"}},
-    {'{', {"...#.", "..#..", "..#..", ".#...", "..#..", "..#..", "...#."}},
-    {'|', {"..#..", "..#..", "..#..", "..#..", "..#..", "..#..", "..#.."}},
-    {'}', {".#...", "..#..", "..#..", "...#.", "..#..", "..#..", ".#..."}},
-    {'~', {".....", ".....", ".#...", "#.#.#", "...#.", ".....", "....."}},
-};
+// ---- the font ----
 
-// The unknown-character box: the 5 x 7 outline.
-const GlyphArt kBoxArt = {'?', {"#####", "#...#", "#...#", "#...#", "#...#", "#...#", "#####"}};
-
-using GlyphBits = std::array<std::uint8_t, kGlyphHeight>;  // bit (4 - column) of row r
-
-GlyphBits parse(const GlyphArt& g) {
-    GlyphBits bits{};
-    for (int r = 0; r < kGlyphHeight; ++r) {
-        const char* row = g.rows[r];
-        if (!row) continue;
-        for (int c = 0; c < kGlyphWidth; ++c) {
-            if (row[c] == '#') bits[r] |= static_cast<std::uint8_t>(1u << (kGlyphWidth - 1 - c));
-            else if (row[c] != '.') throw std::logic_error(std::string("Plot font: bad row in glyph '") + g.c + "'");
-        }
-        if (row[kGlyphWidth] != '\0') throw std::logic_error(std::string("Plot font: row too long in glyph '") + g.c + "'");
-    }
-    return bits;
+std::string font_error(const std::string& path, const std::string& why) {
+    return "font file " + path + ": " + why +
+           " (figures are drawn in DejaVu Sans read from this file; it comes with the Debian package "
+           "fonts-dejavu-core: scripts/install-deps installs it)";
 }
 
-struct Font {
-    std::array<GlyphBits, 128> glyphs{};
-    std::array<bool, 128> known{};
-    GlyphBits box{};
-    Font() {
-        for (const GlyphArt& g : kGlyphArt) {
-            const auto c = static_cast<unsigned char>(g.c);
-            glyphs[c] = parse(g);
-            known[c] = true;
-        }
-        box = parse(kBoxArt);
-    }
-    const GlyphBits& glyph(int code) const { return code >= 0 && code < 128 && known[code] ? glyphs[code] : box; }
-};
-
-const Font& font() {
-    static const Font f;
-    return f;
+// Opens `path` as face 0; the caller owns the face.
+FT_Face open_face(FT_Library library, const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) throw std::runtime_error(font_error(path, "missing"));
+    FT_Face face = nullptr;
+    if (const FT_Error e = FT_New_Face(library, path.c_str(), 0, &face))
+        throw std::runtime_error(font_error(path, "not a font FreeType can read (FreeType error " + std::to_string(e) + ")"));
+    return face;
 }
 
-// The text as lines of character codes: ASCII as itself, anything else (a UTF-8 sequence: a lead
-// byte and its continuation bytes; a stray continuation byte) as -1.
-std::vector<std::vector<int>> split_lines(const std::string& text) {
-    std::vector<std::vector<int>> lines(1);
-    bool in_sequence = false;
-    for (const char ch : text) {
-        const auto b = static_cast<unsigned char>(ch);
-        if (b == '\n') {
-            lines.emplace_back();
-            in_sequence = false;
-        } else if (b < 0x80) {
-            lines.back().push_back(b);
-            in_sequence = false;
-        } else if ((b & 0xC0) == 0x80 && in_sequence) {
-            // continuation of the current sequence: already drawn as one box
+struct FreeTypeLibrary {
+    FT_Library library = nullptr;
+    FreeTypeLibrary() {
+        if (FT_Init_FreeType(&library)) throw std::runtime_error("FreeType could not be initialised");
+    }
+    ~FreeTypeLibrary() { FT_Done_FreeType(library); }
+    FreeTypeLibrary(const FreeTypeLibrary&) = delete;
+    FreeTypeLibrary& operator=(const FreeTypeLibrary&) = delete;
+};
+
+// kFontFile as a Cairo font face, made once and kept for the life of the process (with the
+// FreeType face and library under it). Cairo serialises its own use of the FT_Face, so figures
+// may be drawn from several threads.
+cairo_font_face_t* font_face() {
+    static cairo_font_face_t* const face = [] {
+        auto* library = new FreeTypeLibrary();  // kept: the face below lives as long as the process
+        FT_Face ft = nullptr;
+        try {
+            ft = open_face(library->library, kFontFile);
+        } catch (...) {
+            delete library;
+            throw;
+        }
+        cairo_font_face_t* f = cairo_ft_font_face_create_for_ft_face(ft, 0);
+        if (cairo_font_face_status(f) != CAIRO_STATUS_SUCCESS)
+            throw std::runtime_error(font_error(kFontFile, std::string("Cairo cannot use it: ") +
+                                                               cairo_status_to_string(cairo_font_face_status(f))));
+        return f;
+    }();
+    return face;
+}
+
+// ---- drawing ----
+
+// A white RGB canvas with a Cairo context: antialiased lines and text (grey-scale antialiasing,
+// slight hinting, metrics rounded to whole pixels; fixed here, not taken from the machine).
+class Canvas {
+public:
+    Canvas(int width, int height) {
+        surface_ = cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height);
+        cr_ = cairo_create(surface_);
+        if (cairo_status(cr_) != CAIRO_STATUS_SUCCESS) {
+            const std::string why = cairo_status_to_string(cairo_status(cr_));
+            cairo_destroy(cr_);
+            cairo_surface_destroy(surface_);
+            throw std::runtime_error("Cairo: cannot make a " + std::to_string(width) + " x " + std::to_string(height) +
+                                     " canvas: " + why);
+        }
+        cairo_font_options_t* o = cairo_font_options_create();
+        cairo_font_options_set_antialias(o, CAIRO_ANTIALIAS_GRAY);
+        cairo_font_options_set_hint_style(o, CAIRO_HINT_STYLE_SLIGHT);
+        cairo_font_options_set_hint_metrics(o, CAIRO_HINT_METRICS_ON);
+        cairo_set_font_options(cr_, o);
+        cairo_font_options_destroy(o);
+        cairo_set_font_face(cr_, font_face());
+        cairo_set_source_rgb(cr_, 1, 1, 1);
+        cairo_paint(cr_);
+        cairo_set_line_width(cr_, 1.0);
+        cairo_set_line_cap(cr_, CAIRO_LINE_CAP_BUTT);
+    }
+    ~Canvas() {
+        cairo_destroy(cr_);
+        cairo_surface_destroy(surface_);
+    }
+    Canvas(const Canvas&) = delete;
+    Canvas& operator=(const Canvas&) = delete;
+
+    double width_of(const std::string& text, double size) {
+        cairo_set_font_size(cr_, size);
+        cairo_text_extents_t e;
+        cairo_text_extents(cr_, text.c_str(), &e);
+        return e.x_advance;
+    }
+    // ascent, line height (ascent + descent rounded up)
+    std::pair<double, int> line(double size) {
+        cairo_set_font_size(cr_, size);
+        cairo_font_extents_t e;
+        cairo_font_extents(cr_, &e);
+        return {e.ascent, static_cast<int>(std::ceil(e.ascent + e.descent))};
+    }
+    Label label(const std::string& text, double size, bool vertical = false) {
+        Label l;
+        l.text = text;
+        l.size = size;
+        l.vertical = vertical;
+        const double w = width_of(text, size);
+        const int h = line(size).second;
+        l.box.w = vertical ? h : w;
+        l.box.h = vertical ? w : h;
+        return l;
+    }
+
+    void draw(const Label& l, const Rgb& colour = kBlack) {
+        if (l.text.empty()) return;
+        const double ascent = line(l.size).first;
+        set_colour(colour);
+        cairo_save(cr_);
+        if (l.vertical) {
+            cairo_translate(cr_, l.box.x + ascent, l.box.y + l.box.h);
+            cairo_rotate(cr_, -std::acos(0.0));  // a quarter turn counter-clockwise
+            cairo_move_to(cr_, 0, 0);
         } else {
-            lines.back().push_back(-1);
-            in_sequence = (b & 0xC0) == 0xC0;
+            cairo_move_to(cr_, l.box.x, l.box.y + ascent);
         }
+        cairo_show_text(cr_, l.text.c_str());
+        cairo_restore(cr_);
     }
-    return lines;
-}
+    void segment(double x0, double y0, double x1, double y1, const Rgb& colour) {
+        set_colour(colour);
+        cairo_move_to(cr_, x0, y0);
+        cairo_line_to(cr_, x1, y1);
+        cairo_stroke(cr_);
+    }
+    // A 1-pixel line just outside the w x h block at (x, y).
+    void frame(int x, int y, int w, int h, const Rgb& colour) {
+        set_colour(colour);
+        cairo_rectangle(cr_, x - 0.5, y - 0.5, w + 1.0, h + 1.0);
+        cairo_stroke(cr_);
+    }
+    void fill(const Box& b, const Rgb& colour) {
+        set_colour(colour);
+        cairo_rectangle(cr_, b.x, b.y, b.w, b.h);
+        cairo_fill(cr_);
+    }
 
-void check_scale(int scale, const char* who) {
-    if (scale < 1) throw std::invalid_argument(std::string(who) + ": text scale must be >= 1, got " + std::to_string(scale));
-}
+    // The picture as an RGB Image, each channel code / 255.
+    Image image() {
+        cairo_surface_flush(surface_);
+        const int w = cairo_image_surface_get_width(surface_), h = cairo_image_surface_get_height(surface_);
+        const int stride = cairo_image_surface_get_stride(surface_);
+        const unsigned char* data = cairo_image_surface_get_data(surface_);
+        Image img(w, h, 3);
+        float* out = img.data.data();
+        for (int r = 0; r < h; ++r) {
+            const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(r) * stride);
+            for (int c = 0; c < w; ++c) {
+                const std::uint32_t p = row[c];
+                *out++ = static_cast<float>((p >> 16) & 0xFF) / 255.0f;
+                *out++ = static_cast<float>((p >> 8) & 0xFF) / 255.0f;
+                *out++ = static_cast<float>(p & 0xFF) / 255.0f;
+            }
+        }
+        return img;
+    }
 
-void set_pixel(Image& img, int row, int col, const Rgb& c) {
-    if (row < 0 || col < 0 || row >= img.height || col >= img.width) return;
-    for (int k = 0; k < 3; ++k) img.at(row, col, k) = c[k];
-}
+private:
+    void set_colour(const Rgb& c) { cairo_set_source_rgb(cr_, c[0], c[1], c[2]); }
+    cairo_surface_t* surface_ = nullptr;
+    cairo_t* cr_ = nullptr;
+};
 
 void fill_rect(Image& img, int x, int y, int w, int h, const Rgb& c) {
     const int r0 = std::max(y, 0), r1 = std::min(y + h, img.height);
     const int c0 = std::max(x, 0), c1 = std::min(x + w, img.width);
     for (int r = r0; r < r1; ++r)
         for (int col = c0; col < c1; ++col)
-            for (int k = 0; k < 3; ++k) img.at(r, col, k) = c[k];
+            for (int k = 0; k < 3; ++k) img.at(r, col, k) = c[static_cast<std::size_t>(k)];
 }
 
-Image white_canvas(int width, int height) {
-    Image img(width, height, 3);
-    std::fill(img.data.begin(), img.data.end(), 1.0f);
-    return img;
+// A pixel-crisp position for a 1-pixel line near coordinate v in [0, n]: the middle of the pixel
+// v falls in, the pixel left of (above) v in the first half, so that 0 and n land on the frame
+// lines just outside the block.
+double crisp(double v, int n) { return v <= 0.5 * n ? std::ceil(v) - 0.5 : std::floor(v) + 0.5; }
+
+// Replaces every hyphen-minus by a real minus sign (U+2212).
+std::string with_minus_signs(const std::string& s) {
+    std::string out;
+    for (const char ch : s) {
+        if (ch == '-') out += "\xE2\x88\x92";
+        else out += ch;
+    }
+    return out;
+}
+
+// The bounding box of boxes (x0, y0, x1, y1).
+struct Bounds {
+    double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+    void add(const Box& b) {
+        x0 = std::min(x0, b.x);
+        y0 = std::min(y0, b.y);
+        x1 = std::max(x1, b.x + b.w);
+        y1 = std::max(y1, b.y + b.h);
+    }
+};
+
+// Ticks over [lo, hi] on an axis `length` pixels long whose labels take extent(label) pixels
+// along it (see Plot.h, "axis ticks").
+struct AxisTicks {
+    std::vector<double> values;
+    std::vector<std::string> labels;
+};
+
+template <class Extent>
+AxisTicks axis_ticks(double lo, double hi, double length, const Extent& extent, bool whole_steps = false) {
+    auto position = [&](double v) { return hi > lo ? (v - lo) / (hi - lo) * length : 0.0; };
+    auto apart = [&](double a, const std::string& la, double b, const std::string& lb) {
+        return std::fabs(position(b) - position(a)) >= (extent(la) + extent(lb)) / 2 + kPlotTickLabelGap;
+    };
+    AxisTicks t;
+    for (int n = static_cast<int>(length) / kPlotTickSpacing + 1; n >= 2; --n) {
+        t.values = nice_ticks(lo, hi, n, whole_steps);
+        t.labels = tick_labels(t.values);
+        bool fits = true;
+        for (std::size_t i = 1; i < t.values.size() && fits; ++i)
+            fits = apart(t.values[i - 1], t.labels[i - 1], t.values[i], t.labels[i]);
+        if (fits || n == 2) {
+            if (fits) return t;
+            break;
+        }
+    }
+    // Still too close: keep a tick only where its label clears the last kept one.
+    AxisTicks kept;
+    for (std::size_t i = 0; i < t.values.size(); ++i)
+        if (kept.values.empty() || apart(kept.values.back(), kept.labels.back(), t.values[i], t.labels[i])) {
+            kept.values.push_back(t.values[i]);
+            kept.labels.push_back(t.labels[i]);
+        }
+    return kept;
+}
+
+void shift(Label& l, double dx, double dy) {
+    l.box.x += dx;
+    l.box.y += dy;
 }
 
 }  // namespace
@@ -319,40 +379,126 @@ Rgb viridis(double t) {
 
 // ---- text ----
 
-int text_width(const std::string& text, int scale) {
-    check_scale(scale, "text_width");
-    std::size_t longest = 0;
-    for (const auto& line : split_lines(text)) longest = std::max(longest, line.size());
-    return longest == 0 ? 0 : (kGlyphAdvance * static_cast<int>(longest) - 1) * scale;
+void require_font(const std::string& path) {
+    if (path == kFontFile) {
+        font_face();
+        return;
+    }
+    FreeTypeLibrary library;
+    FT_Done_Face(open_face(library.library, path));
 }
 
-int text_height(const std::string& text, int scale) {
-    check_scale(scale, "text_height");
-    const int lines = static_cast<int>(split_lines(text).size());
-    return (kLineAdvance * (lines - 1) + kGlyphHeight) * scale;
+double text_width(const std::string& text, double size) {
+    Canvas c(1, 1);
+    return c.width_of(text, size);
 }
 
-void draw_text(Image& rgb, int x, int y, const std::string& text, int scale, Rgb colour) {
-    check_scale(scale, "draw_text");
-    if (rgb.channels != 3)
-        throw std::invalid_argument("draw_text: needs an RGB image (3 channels), got " + std::to_string(rgb.channels));
-    const Font& f = font();
-    int line_y = y;
-    for (const auto& line : split_lines(text)) {
-        int gx = x;
-        for (const int code : line) {
-            const GlyphBits& g = f.glyph(code);
-            for (int r = 0; r < kGlyphHeight; ++r)
-                for (int c = 0; c < kGlyphWidth; ++c)
-                    if (g[static_cast<std::size_t>(r)] & (1u << (kGlyphWidth - 1 - c)))
-                        fill_rect(rgb, gx + c * scale, line_y + r * scale, scale, scale, colour);
-            gx += kGlyphAdvance * scale;
+int text_height(double size) {
+    Canvas c(1, 1);
+    return c.line(size).second;
+}
+
+// ---- ticks ----
+
+std::vector<double> nice_ticks(double lo, double hi, int max_ticks, bool whole_steps) {
+    if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi)
+        throw std::invalid_argument("nice_ticks: the range [" + format_tick(lo, 9) + ", " + format_tick(hi, 9) +
+                                    "] must be finite with lo <= hi");
+    if (lo == hi) return {lo};
+    const int n = std::max(2, max_ticks);
+    auto pow10 = [](int e) {
+        double p = 1;
+        for (int i = 0; i < std::abs(e); ++i) p *= 10;
+        return p;
+    };
+    // step = mantissa * 10^exponent with an integer mantissa (10, 20, 25, 50), so that tick
+    // k * step is the integer k * mantissa scaled by an exact power of ten: one rounding.
+    struct Step {
+        long long mantissa;
+        int exponent;
+    };
+    auto step_value = [&](const Step& s) {
+        return s.exponent >= 0 ? s.mantissa * pow10(s.exponent) : s.mantissa / pow10(-s.exponent);
+    };
+    auto ticks_of = [&](const Step& s) {
+        const double step = step_value(s);
+        const double k0 = std::ceil(lo / step - 1e-9), k1 = std::floor(hi / step + 1e-9);
+        std::vector<double> t;
+        for (double k = k0; k <= k1; ++k) {
+            const double km = k * static_cast<double>(s.mantissa);
+            t.push_back(s.exponent >= 0 ? km * pow10(s.exponent) : km / pow10(-s.exponent));
         }
-        line_y += kLineAdvance * scale;
+        return t;
+    };
+    auto count_of = [&](const Step& s) {
+        const double step = step_value(s);
+        return std::floor(hi / step + 1e-9) - std::ceil(lo / step - 1e-9) + 1;
+    };
+    // Start well below the spacing n ticks need (more than n ticks there) and grow.
+    int e = static_cast<int>(std::floor(std::log10((hi - lo) / n))) - 2;
+    Step previous{0, 0};
+    for (;; ++e) {
+        for (const long long m : {10LL, 20LL, 25LL, 50LL}) {
+            const Step s{m, e};
+            if (whole_steps && (e < -1 || (e == -1 && m == 25))) continue;  // steps below 1, and 2.5
+            const double count = count_of(s);
+            if (count <= n) return count >= 2 || previous.mantissa == 0 ? ticks_of(s) : ticks_of(previous);
+            previous = s;
+        }
     }
 }
 
+std::vector<std::string> tick_labels(const std::vector<double>& ticks) {
+    std::vector<std::string> out;
+    if (ticks.empty()) return out;
+    double largest = 0, step = 0;
+    for (const double t : ticks) largest = std::max(largest, std::fabs(t));
+    if (ticks.size() > 1) step = std::fabs(ticks[1] - ticks[0]);
+    char buf[64];
+    if (largest >= 1e6 || (step > 0 && step < 1e-4)) {
+        for (int digits = 1; digits <= 17; ++digits) {
+            out.clear();
+            for (const double t : ticks) out.push_back(format_tick(t, digits));
+            bool distinct = true;
+            for (std::size_t i = 1; i < out.size(); ++i) distinct = distinct && out[i] != out[i - 1];
+            if (distinct) break;
+        }
+    } else {
+        int decimals = 0;
+        for (; decimals < 12; ++decimals) {
+            const double scale = std::pow(10.0, decimals);
+            bool exact = true;
+            for (const double t : ticks) exact = exact && std::fabs(t * scale - std::round(t * scale)) < 1e-6;
+            if (exact) break;
+        }
+        for (const double t : ticks) {
+            std::snprintf(buf, sizeof buf, "%.*f", decimals, t == 0 ? 0.0 : t);
+            out.emplace_back(buf);
+        }
+    }
+    for (auto& s : out) s = with_minus_signs(s);
+    return out;
+}
+
+std::string format_tick(double value, int significant_digits) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*g", std::clamp(significant_digits, 1, 17), value);
+    std::string s = buf;
+    const auto e = s.find('e');
+    if (e == std::string::npos) return s;
+    std::string mantissa = s.substr(0, e), exponent = s.substr(e + 1);
+    std::string sign;
+    if (!exponent.empty() && (exponent[0] == '+' || exponent[0] == '-')) {
+        if (exponent[0] == '-') sign = "-";
+        exponent.erase(0, 1);
+    }
+    while (exponent.size() > 1 && exponent[0] == '0') exponent.erase(0, 1);
+    return mantissa + "e" + sign + exponent;
+}
+
 // ---- pseudo colour ----
+
+bool ImageExtent::known() const { return std::isfinite(width) && std::isfinite(height) && width > 0 && height > 0; }
 
 std::pair<double, double> colour_range(const std::vector<float>& values, double lo, double hi) {
     if (std::isinf(lo) || std::isinf(hi)) throw std::invalid_argument("colour range: lo and hi must be finite or NaN");
@@ -373,24 +519,9 @@ std::pair<double, double> colour_range(const std::vector<float>& values, double 
     return {lo, hi};
 }
 
-std::string format_tick(double value, int significant_digits) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*g", std::clamp(significant_digits, 1, 17), value);
-    std::string s = buf;
-    const auto e = s.find('e');
-    if (e == std::string::npos) return s;
-    std::string mantissa = s.substr(0, e), exponent = s.substr(e + 1);
-    std::string sign;
-    if (!exponent.empty() && (exponent[0] == '+' || exponent[0] == '-')) {
-        if (exponent[0] == '-') sign = "-";
-        exponent.erase(0, 1);
-    }
-    while (exponent.size() > 1 && exponent[0] == '0') exponent.erase(0, 1);
-    return mantissa + "e" + sign + exponent;
-}
-
 PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int width, int height,
-                                        const std::string& title, double lo, double hi, int pixel_scale) {
+                                        const std::string& title, double lo, double hi, int pixel_scale,
+                                        const ImageExtent& extent) {
     if (width < 1 || height < 1)
         throw std::invalid_argument("pseudo_colour: image size " + std::to_string(width) + " x " +
                                     std::to_string(height) + " must be at least 1 x 1");
@@ -404,85 +535,140 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
 
     PseudoColourLayout L;
     std::tie(L.lo, L.hi) = colour_range(values, lo, hi);
-    const int ts = kPlotTextScale, M = kPlotMargin;
+    Canvas meter(1, 1);
+    const int th = meter.line(kTickFontSize).second;
+    const int out = 1 + kPlotTickLength + kPlotTickLabelGap;  // from a block's edge to its tick labels
+
+    // Everything relative to the image's top-left corner first; shifted into place at the end.
     L.image_w = width * pixel_scale;
     L.image_h = height * pixel_scale;
     L.bar_w = kPlotBarWidth;
     L.bar_h = std::max(L.image_h, kPlotMinBarHeight);
+    L.bar_x = L.image_w + kPlotBarGap;
+    Bounds bounds;
+    bounds.add({-1.0, -1.0, L.image_w + 2.0, L.image_h + 2.0});
+    bounds.add({L.bar_x - 1.0, -1.0, L.bar_w + 2.0, L.bar_h + 2.0});
 
-    const int n = L.bar_h >= kPlotFiveTickHeight ? 5 : 3;
-    for (int i = 0; i < n; ++i) {
-        double v;
-        if (i == 0) v = L.hi;
-        else if (i == n - 1) v = L.lo;
-        else {
-            v = L.hi - (L.hi - L.lo) * i / (n - 1);
-            if (std::fabs(v) < 1e-9 * (L.hi - L.lo)) v = 0.0;  // no "1e-17" for a zero tick
+    const auto along_y = [&](const std::string&) { return static_cast<double>(th); };
+    const auto along_x = [&](const std::string& s) { return meter.width_of(s, kTickFontSize); };
+    {
+        // Whole numbers only (counts, indices, a mask) get whole-number ticks.
+        bool whole = std::floor(L.lo) == L.lo && std::floor(L.hi) == L.hi;
+        for (std::size_t k = 0; k < values.size() && whole; ++k)
+            whole = !std::isfinite(values[k]) || std::floor(values[k]) == values[k];
+        AxisTicks bar = axis_ticks(L.lo, L.hi, L.bar_h - 1.0, along_y, whole);
+        L.tick_values = std::move(bar.values);
+        L.tick_labels = std::move(bar.labels);
+    }
+    for (std::size_t i = 0; i < L.tick_values.size(); ++i) {
+        const double row = (L.hi - L.tick_values[i]) / (L.hi - L.lo) * (L.bar_h - 1) + 0.5;
+        L.tick_rows.push_back(row);
+        Label l = meter.label(L.tick_labels[i], kTickFontSize);
+        l.box.x = L.bar_x + L.bar_w + out;
+        l.box.y = row - th / 2.0;
+        L.labels.push_back(l);
+    }
+
+    if (extent.known()) {
+        AxisTicks xt = axis_ticks(-extent.width / 2, extent.width / 2, L.image_w, along_x);
+        AxisTicks yt = axis_ticks(-extent.height / 2, extent.height / 2, L.image_h, along_y);
+        L.x_ticks = xt.values;
+        L.y_ticks = yt.values;
+        const auto& xl = xt.labels;
+        const auto& yl = yt.labels;
+        double below = L.image_h + out + th;  // the bottom of the x tick labels
+        for (std::size_t i = 0; i < L.x_ticks.size(); ++i) {
+            const double col = (L.x_ticks[i] + extent.width / 2) / extent.width * L.image_w;
+            L.x_tick_columns.push_back(col);
+            Label l = meter.label(xl[i], kTickFontSize);
+            l.box.x = col - l.box.w / 2;
+            l.box.y = L.image_h + out;
+            L.labels.push_back(l);
         }
-        L.tick_values.push_back(v);
-        L.tick_rows.push_back(0);  // set below, once the bar is placed
+        double left = -out;  // the left edge of the y tick labels
+        for (std::size_t i = 0; i < L.y_ticks.size(); ++i) {
+            const double row = (extent.height / 2 - L.y_ticks[i]) / extent.height * L.image_h;
+            L.y_tick_rows.push_back(row);
+            Label l = meter.label(yl[i], kTickFontSize);
+            l.box.x = -out - l.box.w;
+            l.box.y = row - th / 2.0;
+            left = std::min(left, l.box.x);
+            L.labels.push_back(l);
+        }
+        Label x = meter.label("x (mm)", kLabelFontSize);
+        x.box.x = L.image_w / 2.0 - x.box.w / 2;
+        x.box.y = below + kPlotAxisLabelGap;
+        L.labels.push_back(x);
+        Label y = meter.label("y (mm)", kLabelFontSize, true);
+        y.box.x = left - kPlotAxisLabelGap - y.box.w;
+        y.box.y = L.image_h / 2.0 - y.box.h / 2;
+        L.labels.push_back(y);
     }
-    for (int digits = 3; digits <= 9; ++digits) {
-        L.tick_labels.clear();
-        for (const double v : L.tick_values) L.tick_labels.push_back(format_tick(v, digits));
-        bool distinct = true;
-        for (int i = 1; i < n; ++i) distinct = distinct && L.tick_labels[i] != L.tick_labels[i - 1];
-        if (distinct) break;
+    if (!title.empty()) {
+        double top = -1;  // above the frame and every other label
+        for (const Label& l : L.labels) top = std::min(top, l.box.y);
+        Label t = meter.label(title, kTitleFontSize);
+        t.box.x = L.image_w / 2.0 - t.box.w / 2;
+        t.box.y = top - kPlotTitleGap - t.box.h;
+        L.labels.push_back(t);
     }
-    int label_w = 0;
-    for (const auto& s : L.tick_labels) label_w = std::max(label_w, text_width(s, ts));
 
-    const int T = title.empty() ? 0 : text_height(title, ts);
-    const int Gt = title.empty() ? 0 : kPlotTitleGap;
-    L.title_x = M;
-    L.title_y = M;
-    L.image_x = M;
-    L.image_y = M + T + Gt;
-    L.bar_x = M + L.image_w + kPlotBarGap;
-    L.bar_y = L.image_y;
-    for (int i = 0; i < n; ++i)
-        L.tick_rows[static_cast<std::size_t>(i)] =
-            L.bar_y + static_cast<int>(std::lround((L.bar_h - 1) * static_cast<double>(i) / (n - 1)));
-    L.width = std::max(L.bar_x + L.bar_w + kPlotTickLength + kPlotTickLabelGap + label_w + M,
-                       M + text_width(title, ts) + M);
-    L.height = L.bar_y + L.bar_h + 4 * ts + M;
+    for (const Label& l : L.labels) bounds.add(l.box);
+    const int dx = kPlotMargin - static_cast<int>(std::floor(bounds.x0));
+    const int dy = kPlotMargin - static_cast<int>(std::floor(bounds.y0));
+    L.width = static_cast<int>(std::ceil(bounds.x1)) + dx + kPlotMargin;
+    L.height = static_cast<int>(std::ceil(bounds.y1)) + dy + kPlotMargin;
+    L.image_x = dx;
+    L.image_y = dy;
+    L.bar_x += dx;
+    L.bar_y = dy;
+    for (auto& r : L.tick_rows) r += dy;
+    for (auto& c : L.x_tick_columns) c += dx;
+    for (auto& r : L.y_tick_rows) r += dy;
+    for (auto& l : L.labels) shift(l, dx, dy);
     return L;
 }
 
 Image pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
-                    double lo, double hi, int pixel_scale) {
-    const PseudoColourLayout L = pseudo_colour_layout(values, width, height, title, lo, hi, pixel_scale);
-    Image img = white_canvas(L.width, L.height);
-    const int ts = kPlotTextScale;
-    const double range = L.hi - L.lo;
+                    double lo, double hi, int pixel_scale, const ImageExtent& extent) {
+    const PseudoColourLayout L = pseudo_colour_layout(values, width, height, title, lo, hi, pixel_scale, extent);
+    Canvas canvas(L.width, L.height);
+    canvas.frame(L.image_x, L.image_y, L.image_w, L.image_h, kFrameColour);
+    canvas.frame(L.bar_x, L.bar_y, L.bar_w, L.bar_h, kFrameColour);
+    const double bar_right = L.bar_x + L.bar_w + 1;
+    for (const double row : L.tick_rows) {
+        const double y = crisp(row - L.bar_y, L.bar_h) + L.bar_y;
+        canvas.segment(bar_right, y, bar_right + kPlotTickLength, y, kFrameColour);
+    }
+    const double image_bottom = L.image_y + L.image_h + 1, image_left = L.image_x - 1;
+    for (const double col : L.x_tick_columns) {
+        const double x = crisp(col - L.image_x, L.image_w) + L.image_x;
+        canvas.segment(x, image_bottom, x, image_bottom + kPlotTickLength, kFrameColour);
+    }
+    for (const double row : L.y_tick_rows) {
+        const double y = crisp(row - L.image_y, L.image_h) + L.image_y;
+        canvas.segment(image_left, y, image_left - kPlotTickLength, y, kFrameColour);
+    }
+    for (const Label& l : L.labels) canvas.draw(l);
+    Image img = canvas.image();
 
+    // The data and the colour bar, exact: written into the picture, not drawn.
+    const double range = L.hi - L.lo;
     for (int m = 0; m < height; ++m)
         for (int n = 0; n < width; ++n) {
             const double v = values[static_cast<std::size_t>(m) * static_cast<std::size_t>(width) + static_cast<std::size_t>(n)];
             const Rgb c = viridis((v - L.lo) / range);  // NaN stays NaN; +-inf clamp to the ends
             fill_rect(img, L.image_x + n * pixel_scale, L.image_y + m * pixel_scale, pixel_scale, pixel_scale, c);
         }
-
-    // The bar, row r showing t = 1 - r / (H - 1): exactly 1 (hi) on top, exactly 0 (lo) at the bottom.
     for (int r = 0; r < L.bar_h; ++r)
         fill_rect(img, L.bar_x, L.bar_y + r, L.bar_w, 1, viridis(1.0 - static_cast<double>(r) / (L.bar_h - 1)));
-    fill_rect(img, L.bar_x - 1, L.bar_y - 1, L.bar_w + 2, 1, kFrameColour);
-    fill_rect(img, L.bar_x - 1, L.bar_y + L.bar_h, L.bar_w + 2, 1, kFrameColour);
-    fill_rect(img, L.bar_x - 1, L.bar_y, 1, L.bar_h, kFrameColour);
-    fill_rect(img, L.bar_x + L.bar_w, L.bar_y, 1, L.bar_h, kFrameColour);
-
-    const int label_x = L.bar_x + L.bar_w + kPlotTickLength + kPlotTickLabelGap;
-    for (std::size_t i = 0; i < L.tick_rows.size(); ++i) {
-        fill_rect(img, L.bar_x + L.bar_w, L.tick_rows[i], kPlotTickLength, 1, kFrameColour);
-        draw_text(img, label_x, L.tick_rows[i] - 7 * ts / 2, L.tick_labels[i], ts, kBlack);
-    }
-    if (!title.empty()) draw_text(img, L.title_x, L.title_y, title, ts, kBlack);
     return img;
 }
 
 void write_pseudo_colour_png(const std::string& path, const std::vector<float>& values, int width, int height,
-                             const std::string& title, double lo, double hi, int pixel_scale) {
-    write_png(path, pseudo_colour(values, width, height, title, lo, hi, pixel_scale));
+                             const std::string& title, double lo, double hi, int pixel_scale,
+                             const ImageExtent& extent) {
+    write_png(path, pseudo_colour(values, width, height, title, lo, hi, pixel_scale, extent));
 }
 
 // ---- montage ----
@@ -507,101 +693,184 @@ Image montage(const std::vector<std::vector<Image>>& cells, const std::vector<st
             if (c.width > 0 && c.height > 0) cw = std::max(cw, c.width), ch = std::max(ch, c.height);
         }
 
-    const int ts = kPlotTextScale, M = kPlotMargin;
-    int sw = cw, label_h = 0, row_label_w = 0;
-    for (const auto& s : column_labels) {
-        sw = std::max(sw, text_width(s, ts));
-        label_h = std::max(label_h, text_height(s, ts));
-    }
-    for (const auto& s : row_labels) row_label_w = std::max(row_label_w, text_width(s, ts));
-    const int T = title.empty() ? 0 : text_height(title, ts) + kMontageLabelGap;
-    const int C = column_labels.empty() ? 0 : label_h + kMontageColumnGap;
-    const int R = row_labels.empty() ? 0 : row_label_w + kMontageLabelGap;
-    const int W = std::max(M + R + columns * sw + (columns - 1) * kMontageGap + M, M + text_width(title, ts) + M);
-    const int H = M + T + C + rows * ch + (rows - 1) * kMontageGap + M;
-    Image img = white_canvas(W, H);
+    Canvas meter(1, 1);
+    const int M = kPlotMargin, lh = meter.line(kLabelFontSize).second;
+    int sw = cw, sh = ch;
+    for (const auto& s : column_labels) sw = std::max(sw, static_cast<int>(std::ceil(meter.width_of(s, kLabelFontSize))));
+    for (const auto& s : row_labels) sh = std::max(sh, static_cast<int>(std::ceil(meter.width_of(s, kLabelFontSize))));
+    const int T = title.empty() ? 0 : meter.line(kTitleFontSize).second + kMontageLabelGap;
+    const int C = column_labels.empty() ? 0 : lh + kMontageColumnGap;
+    const int R = row_labels.empty() ? 0 : lh + kMontageLabelGap;
+    const int title_w = static_cast<int>(std::ceil(meter.width_of(title, kTitleFontSize)));
+    const int W = std::max(M + R + columns * sw + (columns - 1) * kMontageGap + M, M + title_w + M);
+    const int H = M + T + C + rows * sh + (rows - 1) * kMontageGap + M;
 
+    Canvas canvas(W, H);
     const int x0 = M + R, y0 = M + T + C;
+    for (int c = 0; c < static_cast<int>(column_labels.size()); ++c) {
+        Label l = meter.label(column_labels[static_cast<std::size_t>(c)], kLabelFontSize);
+        l.box.x = x0 + c * (sw + kMontageGap) + (sw - l.box.w) / 2;
+        l.box.y = M + T;
+        canvas.draw(l);
+    }
+    for (int r = 0; r < static_cast<int>(row_labels.size()); ++r) {
+        Label l = meter.label(row_labels[static_cast<std::size_t>(r)], kLabelFontSize, true);
+        l.box.x = M;
+        l.box.y = y0 + r * (sh + kMontageGap) + (sh - l.box.h) / 2;
+        canvas.draw(l);
+    }
+    if (!title.empty()) {
+        Label l = meter.label(title, kTitleFontSize);
+        l.box.x = (W - l.box.w) / 2;
+        l.box.y = M;
+        canvas.draw(l);
+    }
+    Image img = canvas.image();
+
     for (int r = 0; r < rows; ++r)
         for (int c = 0; c < static_cast<int>(cells[static_cast<std::size_t>(r)].size()); ++c) {
             const Image& cell = cells[static_cast<std::size_t>(r)][static_cast<std::size_t>(c)];
             if (cell.width <= 0 || cell.height <= 0) continue;
             const int cx = x0 + c * (sw + kMontageGap) + (sw - cell.width) / 2;
-            const int cy = y0 + r * (ch + kMontageGap) + (ch - cell.height) / 2;
+            const int cy = y0 + r * (sh + kMontageGap) + (sh - cell.height) / 2;
             for (int i = 0; i < cell.height; ++i)
                 for (int j = 0; j < cell.width; ++j) {
                     Rgb px;
                     bool nan = false;
                     for (int k = 0; k < 3; ++k) {
-                        px[k] = cell.at(i, j, cell.channels == 1 ? 0 : k);
-                        nan = nan || std::isnan(px[k]);
+                        px[static_cast<std::size_t>(k)] = cell.at(i, j, cell.channels == 1 ? 0 : k);
+                        nan = nan || std::isnan(px[static_cast<std::size_t>(k)]);
                     }
-                    set_pixel(img, cy + i, cx + j, nan ? kNanColour : px);
+                    fill_rect(img, cx + j, cy + i, 1, 1, nan ? kNanColour : px);
                 }
         }
-    for (int c = 0; c < static_cast<int>(column_labels.size()); ++c) {
-        const std::string& s = column_labels[static_cast<std::size_t>(c)];
-        draw_text(img, x0 + c * (sw + kMontageGap) + (sw - text_width(s, ts)) / 2, M + T, s, ts, kBlack);
-    }
-    for (int r = 0; r < static_cast<int>(row_labels.size()); ++r) {
-        const std::string& s = row_labels[static_cast<std::size_t>(r)];
-        draw_text(img, M + R - kMontageLabelGap - text_width(s, ts),
-                  y0 + r * (ch + kMontageGap) + (ch - text_height(s, ts)) / 2, s, ts, kBlack);
-    }
-    if (!title.empty()) draw_text(img, (W - text_width(title, ts)) / 2, M, title, ts, kBlack);
     return img;
 }
 
-Image histogram(const std::vector<double>& values, int bins, const std::string& title, const std::string& x_label,
-                bool log_x) {
+// ---- histogram ----
+
+HistogramLayout histogram_layout(const std::vector<double>& values, int bins, const std::string& title,
+                                 const std::string& x_label, bool log_x, const std::string& y_label) {
     if (bins < 1) throw std::invalid_argument("histogram: bins must be >= 1");
+    HistogramLayout L;
     std::vector<double> v;
     for (double x : values)
         if (std::isfinite(x) && (!log_x || x > 0)) v.push_back(log_x ? std::log10(x) : x);
-    double lo = v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
-    double hi = v.empty() ? 1.0 : *std::max_element(v.begin(), v.end());
-    if (!(hi > lo)) {
-        lo -= 0.5;
-        hi += 0.5;
+    L.lo = v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+    L.hi = v.empty() ? 1.0 : *std::max_element(v.begin(), v.end());
+    if (v.empty()) {
+        bins = 1;
+    } else if (!(L.hi > L.lo)) {
+        L.lo -= 0.5;
+        L.hi += 0.5;
         bins = 1;
     }
-    std::vector<long> count(static_cast<size_t>(bins), 0);
-    for (double x : v) ++count[static_cast<size_t>(std::min(bins - 1, static_cast<int>((x - lo) / (hi - lo) * bins)))];
-    const long peak = std::max(1L, *std::max_element(count.begin(), count.end()));
+    L.counts.assign(static_cast<std::size_t>(bins), 0);
+    for (double x : v)
+        ++L.counts[static_cast<std::size_t>(std::min(bins - 1, static_cast<int>((x - L.lo) / (L.hi - L.lo) * bins)))];
+    const long peak = *std::max_element(L.counts.begin(), L.counts.end());
 
-    const int W = 640, H = 400, ts = kPlotTextScale;
-    Image img;
-    img.width = W;
-    img.height = H;
-    img.channels = 3;
-    img.data.assign(static_cast<size_t>(W) * H * 3, 1.0f);
-    auto fill = [&](int x0, int y0, int x1, int y1, Rgb c) {
-        for (int y = std::max(0, y0); y < std::min(H, y1); ++y)
-            for (int x = std::max(0, x0); x < std::min(W, x1); ++x)
-                for (int k = 0; k < 3; ++k) img.data[(static_cast<size_t>(y) * W + x) * 3 + k] = c[static_cast<size_t>(k)];
-    };
-    const int left = 80, right = W - 24, top = 16 + text_height(title, ts) + 12, bottom = H - 24 - 2 * text_height("0", ts);
-    draw_text(img, (W - text_width(title, ts)) / 2, 12, title, ts, kBlack);
-    const Rgb bar = viridis(0.5);
-    const double bw = static_cast<double>(right - left) / bins;
+    Canvas meter(1, 1);
+    const int M = kPlotMargin, th = meter.line(kTickFontSize).second, lh = meter.line(kLabelFontSize).second;
+    const int out = 1 + kPlotTickLength + kPlotTickLabelGap;
+
+    // y: counts 0 .. y_max, whole numbers.
+    L.y_ticks = nice_ticks(0, static_cast<double>(std::max(1L, peak)), 8, true);
+    if (L.y_ticks.back() < peak) L.y_ticks.push_back(L.y_ticks.back() + (L.y_ticks[1] - L.y_ticks[0]));
+    L.y_max = L.y_ticks.back();
+
+    // x: the ticks' values, and where they sit in the (log10) range.
+    std::vector<double> positions;
+    if (log_x) {
+        auto inside = [&](double value) { return std::log10(value) >= L.lo - 1e-9 && std::log10(value) <= L.hi + 1e-9; };
+        for (const std::vector<double>& steps : {std::vector<double>{1}, std::vector<double>{1, 2, 5}}) {
+            L.x_ticks.clear();
+            for (int e = static_cast<int>(std::floor(L.lo)); e <= static_cast<int>(std::ceil(L.hi)); ++e)
+                for (const double s : steps) {
+                    const double t = e >= 0 ? s * std::pow(10.0, e) : s / std::pow(10.0, -e);
+                    if (inside(t)) L.x_ticks.push_back(t);
+                }
+            if (L.x_ticks.size() >= 2) break;
+        }
+        if (L.x_ticks.size() < 2) L.x_ticks = nice_ticks(std::pow(10.0, L.lo), std::pow(10.0, L.hi), 6);
+        for (const double t : L.x_ticks) positions.push_back(std::log10(t));
+    } else {
+        L.x_ticks = nice_ticks(L.lo, L.hi, 8);
+        positions = L.x_ticks;
+    }
+    std::vector<std::string> x_text;
+    if (log_x)
+        for (const double t : L.x_ticks) x_text.push_back(with_minus_signs(format_tick(t, 3)));
+    else
+        x_text = tick_labels(L.x_ticks);
+    const std::vector<std::string> y_text = tick_labels(L.y_ticks);
+
+    double y_label_w = 0, x_label_w = 0;
+    for (const auto& s : y_text) y_label_w = std::max(y_label_w, meter.width_of(s, kTickFontSize));
+    for (const auto& s : x_text) x_label_w = std::max(x_label_w, meter.width_of(s, kTickFontSize));
+    Label t = meter.label(title, kTitleFontSize);
+    const double plot_left = M + lh + kPlotAxisLabelGap + std::ceil(y_label_w) + out;
+    const double plot_right = L.width - M - std::ceil(x_label_w / 2);
+    const double plot_top = M + t.box.h + kPlotTitleGap + std::ceil(th / 2.0);
+    const double plot_bottom = L.height - M - lh - kPlotAxisLabelGap - th - out;
+    L.plot = {plot_left, plot_top, plot_right - plot_left, plot_bottom - plot_top};
+
+    t.box.x = (L.width - t.box.w) / 2;
+    t.box.y = M;
+    L.labels.push_back(t);
+    for (std::size_t i = 0; i < L.x_ticks.size(); ++i) {
+        const double col = L.plot.x + (positions[i] - L.lo) / (L.hi - L.lo) * L.plot.w;
+        L.x_tick_columns.push_back(col);
+        Label l = meter.label(x_text[i], kTickFontSize);
+        l.box.x = col - l.box.w / 2;
+        l.box.y = plot_bottom + out;
+        L.labels.push_back(l);
+    }
+    for (std::size_t i = 0; i < L.y_ticks.size(); ++i) {
+        const double row = plot_bottom - L.y_ticks[i] / L.y_max * L.plot.h;
+        L.y_tick_rows.push_back(row);
+        Label l = meter.label(y_text[i], kTickFontSize);
+        l.box.x = plot_left - out - l.box.w;
+        l.box.y = row - th / 2.0;
+        L.labels.push_back(l);
+    }
+    Label xl = meter.label(x_label, kLabelFontSize);
+    xl.box.x = L.plot.x + L.plot.w / 2 - xl.box.w / 2;
+    xl.box.y = plot_bottom + out + th + kPlotAxisLabelGap;
+    L.labels.push_back(xl);
+    Label yl = meter.label(y_label, kLabelFontSize, true);
+    yl.box.x = M;
+    yl.box.y = L.plot.y + L.plot.h / 2 - yl.box.h / 2;
+    L.labels.push_back(yl);
+
+    const double bw = L.plot.w / bins;
     for (int b = 0; b < bins; ++b) {
-        const int h = static_cast<int>(std::lround(static_cast<double>(count[static_cast<size_t>(b)]) / peak * (bottom - top)));
-        fill(left + static_cast<int>(b * bw) + 1, bottom - h, left + static_cast<int>((b + 1) * bw), bottom, bar);
+        const double h = static_cast<double>(L.counts[static_cast<std::size_t>(b)]) / L.y_max * L.plot.h;
+        L.bars.push_back({L.plot.x + b * bw, plot_bottom - h, bw, h});
     }
-    fill(left, top, left + 1, bottom + 1, kFrameColour);       // y axis
-    fill(left, bottom, right + 1, bottom + 1, kFrameColour);   // x axis
-    const std::string ymax = std::to_string(peak);
-    draw_text(img, left - 8 - text_width(ymax, ts), top, ymax, ts, kBlack);
-    draw_text(img, left - 8 - text_width("0", ts), bottom - text_height("0", ts), "0", ts, kBlack);
-    for (double f : {0.0, 0.5, 1.0}) {
-        const double x = lo + f * (hi - lo);
-        const std::string t = format_tick(log_x ? std::pow(10.0, x) : x);
-        const int px = left + static_cast<int>(f * (right - left));
-        fill(px, bottom, px + 1, bottom + 5, kFrameColour);
-        draw_text(img, std::clamp(px - text_width(t, ts) / 2, 0, W - text_width(t, ts)), bottom + 8, t, ts, kBlack);
+    return L;
+}
+
+Image histogram(const std::vector<double>& values, int bins, const std::string& title, const std::string& x_label,
+                bool log_x, const std::string& y_label) {
+    const HistogramLayout L = histogram_layout(values, bins, title, x_label, log_x, y_label);
+    Canvas canvas(L.width, L.height);
+    const Rgb bar = viridis(0.4);
+    for (const Box& b : L.bars)
+        if (b.h > 0) canvas.fill({b.x + 0.5, b.y, b.w - 1.0, b.h}, bar);  // a pixel of white between bars
+    const double left = std::floor(L.plot.x) - 0.5, bottom = std::ceil(L.plot.y + L.plot.h) + 0.5;
+    canvas.segment(left, bottom, L.plot.x + L.plot.w, bottom, kFrameColour);  // x axis
+    canvas.segment(left, bottom, left, L.plot.y, kFrameColour);               // y axis
+    for (const double col : L.x_tick_columns) {
+        const double x = std::floor(col) + 0.5;
+        canvas.segment(x, bottom, x, bottom + kPlotTickLength, kFrameColour);
     }
-    draw_text(img, (W - text_width(x_label, ts)) / 2, H - 8 - text_height(x_label, ts), x_label, ts, kBlack);
-    return img;
+    for (const double row : L.y_tick_rows) {
+        const double y = std::floor(row) + 0.5;
+        canvas.segment(left, y, left - kPlotTickLength, y, kFrameColour);
+    }
+    for (const Label& l : L.labels) canvas.draw(l);
+    return canvas.image();
 }
 
 }  // namespace ltm

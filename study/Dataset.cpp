@@ -150,7 +150,8 @@ SampleOutcome produce_sample(const DatasetSpec& spec, long i, const fs::path& sa
         write_png16((dir / "mask.png").string(), N, M, gt.mask);
         io::write_file((dir / "labels.json").string(), sample_labels_json(spec, s, run, gt), "labels");
         if (spec.keep_ltm) write_ltm_npz((dir / "ltm.npz").string(), run.render.T);
-        if (spec.previews) write_previews((dir / "previews").string(), run.features, gt);
+        if (spec.previews) write_previews((dir / "previews").string(), run.features, gt,
+                                          {scene.camera.size[0], scene.camera.size[1]});
         io::write_file((dir / kChecksums).string(), checksum_file(dir), "checksums");
         folder.commit();
         t_write.done("");

@@ -62,16 +62,16 @@ void write_dataset_card(const std::string& dir, const json& identity, const std:
     md += "\n## Sizes\n\n";
     for (const auto& [k, v] : sizes) {
         const std::string what = k == "scratch" ? "width (mm)" : "largest semi-axis (mm)";
-        write_png((card / (k + "-size.png")).string(), histogram(v, 20, k + ": " + what, what, true));
+        write_png((card / (k + "-size.png")).string(), histogram(v, 20, k + ": " + what, what, true, "defects"));
         md += fmt::format("![{} sizes](card/{}-size.png)\n\n", k, k);
     }
     for (const auto& [k, v] : lengths) {
-        write_png((card / (k + "-length.png")).string(), histogram(v, 20, k + ": length (mm)", "length (mm)", false));
+        write_png((card / (k + "-length.png")).string(), histogram(v, 20, k + ": length (mm)", "length (mm)", false, "defects"));
         md += fmt::format("![{} lengths](card/{}-length.png)\n\n", k, k);
     }
     for (const auto& [k, v] : areas) {
         write_png((card / (k + "-area.png")).string(),
-                  histogram(v, 20, k + ": mask area (camera pixels)", "camera pixels", false));
+                  histogram(v, 20, k + ": mask area (camera pixels)", "mask area (camera pixels)", false, "defects"));
         md += fmt::format("![{} mask areas](card/{}-area.png)\n\n", k, k);
     }
     md += R"(## Files

@@ -261,16 +261,19 @@ ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vect
     std::vector<std::vector<Image>> cells;
     std::vector<std::string> col_labels;
     for (const auto& r : runs) col_labels.push_back(r.label);
+    std::vector<std::string> row_labels;
     for (const auto& ch : rows) {
         std::vector<Image> row;
         for (const auto& r : runs)
             row.push_back(r.run.features.has(ch)
                               ? pseudo_colour(r.run.features.channel(ch), r.run.features.width, r.run.features.height, "",
-                                              NAN, NAN, std::max(1, 300 / r.run.features.width))
+                                              NAN, NAN, std::max(1, 300 / r.run.features.width),
+                                              {r.scene.camera.size[0], r.scene.camera.size[1]})
                               : Image{});
         cells.push_back(std::move(row));
+        row_labels.push_back(feature_title(ch));
     }
-    out.montage = montage(cells, rows, col_labels, "Simulated inspection images (columns: scenes; rows: images)");
+    out.montage = montage(cells, row_labels, col_labels, "Simulated inspection images (columns: scenes; rows: images)");
     return out;
 }
 

@@ -155,14 +155,16 @@ json coco_annotations(const std::vector<json>& labels) {
     return out;
 }
 
-void write_previews(const std::string& dir, const FeatureImages& f, const GroundTruth& g) {
+void write_previews(const std::string& dir, const FeatureImages& f, const GroundTruth& g, const ImageExtent& camera) {
     fs::create_directories(dir);
     const int scale = std::max(1, 400 / std::max(1, f.width));
     for (const auto& [name, values] : f.channels)
-        write_pseudo_colour_png((fs::path(dir) / (name + ".png")).string(), values, f.width, f.height, name, NAN, NAN, scale);
+        write_pseudo_colour_png((fs::path(dir) / (name + ".png")).string(), values, f.width, f.height,
+                                feature_title(name), NAN, NAN, scale, camera);
     std::vector<float> m(g.mask.begin(), g.mask.end());
-    write_pseudo_colour_png((fs::path(dir) / "mask.png").string(), m, g.width, g.height, "instance mask", 0.0,
-                            std::max<double>(1.0, static_cast<double>(g.defects.size())), scale);
+    write_pseudo_colour_png((fs::path(dir) / "mask.png").string(), m, g.width, g.height,
+                            "instance mask (0: background, k: defect k)", 0.0,
+                            std::max<double>(1.0, static_cast<double>(g.defects.size())), scale, camera);
 }
 
 }  // namespace ltm

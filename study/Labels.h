@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "features/Features.h"
+#include "features/Plot.h"
 #include "study/DatasetSpec.h"
 #include "study/GroundTruth.h"
 #include "study/Sampler.h"
@@ -32,7 +33,8 @@ std::string sample_labels_json(const DatasetSpec& spec, const SampleDraw& sample
 io::Json coco_annotations(const std::vector<io::Json>& labels);
 
 // previews/<channel>.png (pseudo colour) and previews/mask.png (an 8-bit, colour-coded view of the
-// instance mask) of a sample.
-void write_previews(const std::string& dir, const FeatureImages& features, const GroundTruth& truth);
+// instance mask) of a sample, with axes in mm over `camera` (the camera's field of view).
+void write_previews(const std::string& dir, const FeatureImages& features, const GroundTruth& truth,
+                    const ImageExtent& camera);
 
 }  // namespace ltm

@@ -86,6 +86,19 @@ TEST_F(FeaturesCommand, RecomputesWithOptionsWithoutTracing) {
     }
 }
 
+TEST_F(FeaturesCommand, PreviewsAreTheRendersOnes) {
+    // Recomputed with the render's options, the previews come out byte for byte as `render` wrote
+    // them: same data, and the same axes in mm (the camera's 25 x 20 mm, read back from run.json).
+    const std::string before = slurp(dir / "r" / "features" / "ScatterCount.png");
+    const ltm::Image png = ltm::read_image((dir / "r" / "features" / "ScatterCount.png").string());
+    fs::remove(dir / "r" / "features" / "ScatterCount.png");
+    ASSERT_EQ(run("features " + (dir / "r").string()), 0);
+    EXPECT_EQ(slurp(dir / "r" / "features" / "ScatterCount.png"), before);
+    // 16 x 12 pixels at 400 / 16 = 25 per pixel: 400 x 300, with room for axes, title and bar
+    EXPECT_GT(png.width, 400 + 60);
+    EXPECT_GT(png.height, 300 + 60);
+}
+
 TEST_F(FeaturesCommand, BadInputExitsTwoAndOverwritesNothing) {
     const std::string before = slurp(dir / "r" / "features.exr");
     std::string err;
