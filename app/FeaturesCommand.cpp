@@ -9,7 +9,7 @@
 
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
-#include "app/JsonLine.h"
+#include "io/Json.h"
 #include "io/Image.h"
 #include "io/LtmFile.h"
 
@@ -28,24 +28,12 @@ struct FeaturesArgs {
 // The camera's field of view, scene.camera.size in DIR/run.json (read_render_geometry has checked
 // the file), for the previews' axes in mm; unknown (previews without axes) if it is not there.
 ImageExtent camera_extent(const std::string& dir) {
-    std::ifstream in(fs::path(dir) / "run.json");
-    std::stringstream ss;
-    ss << in.rdbuf();
     try {
-        const JsonValue root = parse_json_line(ss.str());
-        auto member = [](const JsonValue& v, const char* key) -> const JsonValue* {
-            if (v.type == JsonValue::Type::Object)
-                for (const auto& [k, x] : v.object)
-                    if (k == key) return &x;
-            return nullptr;
-        };
-        const JsonValue* scene = member(root, "scene");
-        const JsonValue* camera = scene ? member(*scene, "camera") : nullptr;
-        const JsonValue* size = camera ? member(*camera, "size") : nullptr;
-        if (size && size->type == JsonValue::Type::Array && size->array.size() == 2 &&
-            size->array[0].type == JsonValue::Type::Number && size->array[1].type == JsonValue::Type::Number)
-            return {size->array[0].number, size->array[1].number};
-    } catch (const JsonError&) {
+        const io::Json root = io::read_json_file((fs::path(dir) / "run.json").string(), "run record");
+        const io::Json size = root.at("scene").at("camera").at("size");
+        if (size.is_array() && size.size() == 2 && size[0].is_number() && size[1].is_number())
+            return {size[0].get<double>(), size[1].get<double>()};
+    } catch (const std::exception&) {  // no extent: previews without axes
     }
     return {};
 }
