@@ -506,3 +506,19 @@ inline double torus_contact_window(double E, int multiplicity, double derivative
 }
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// A groove's torus as the scene builds it (defects/DefectSolid.cpp make_scratch, U profile, and
+// defects/ScratchPath.cpp circle_surface) against the torus of the scene's nominal numbers: the
+// tube radius rb = (w^2 / 4 + d^2) / (2 d) is 4 roundings from exact, the centre o + u (h0 + s sh
+// + t th) with t = d - rb and the major radius q0 + s sq + t tq a few more each (<= 8 per number),
+// each relative to at most M = |C| + R + r. So every number is within 8 u M of its nominal value
+// and the surface within 3 x 8 u M = 24 u M of the nominal one; a crossing moves along the unit ray
+// by that over |cos| of the incidence, cos = f'(t) / |grad f| = f'(t) / (8 R r rho) on the tube
+// (see torus_f_error).
+inline double torus_built_shift(double magnitude, double cos_incidence) {
+    return 24.0 * (kEps / 2) * magnitude / std::fabs(cos_incidence);
+}
+
+}  // namespace ltm::tol
