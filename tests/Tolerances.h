@@ -430,3 +430,95 @@ constexpr double kHalvingCountRatioHigh = 4.5;
 inline double square_of_root(double v) { return 2.0 * kEps * v; }
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// ---- validation_torus: the tracer's torus roots (trace/Intersect.cpp) against the exact reference ----
+// (validation/TorusReference.h: exact roots rounded to double). u = eps / 2 below.
+//
+// The tracer solves f(s) = sum_i c_i s^i = 0 along x = p + s d, t = tm + s, where (d unit)
+// tm = (C - o).d and p = o + tm d - C are computed in double, and
+//   c0 = A^2 - 4 R^2 (|p|^2 - (p.a)^2), c1 = 8 R^2 (p.a)(d.a), c2 = 2 A - 4 R^2 (1 - (d.a)^2), c3 = 0,
+//   c4 = 1, A = |p|^2 + R^2 - r^2,
+// the textbook quartic f(x) = (|x|^2 + R^2 - r^2)^2 - 4 R^2 (|x|^2 - (x.a)^2) (the reference's f).
+// With Abar = |p|^2 + R^2 + r^2, X = |p|^2 + s^2 (= |x|^2 up to rounding), L = |o| + |tm| + |C| and
+//   M(s) = Abar^2 + 4 R^2 (|p|^2 + (p.a)^2) + 8 R^2 |p.a| |d.a| |s| + (2 Abar + 4 R^2 (1 + (d.a)^2)) s^2 + s^4
+// (the absolute values of every term of every coefficient, times |s|^i), the value the tracer
+// computes at s differs from the exact f at t = tm + s by at most
+//   E(s) = u [64 M(s) + 96 R r (R + r) L + 28 |2 (X - R^2 - r^2)| |s| L]:
+//  (1) coefficients and evaluation: c0 is ~12 roundings deep (|p|^2 and p.a 5 each, A 2 more, the
+//      squares, products and the difference 3), each relative to the magnitude of its terms (c0
+//      cancels: |c0| << Abar^2 near the tube, so its error is relative to m0, not to c0); c2 ~10,
+//      c1 and c4 fewer: <= 30 u m_i each. Horner's rule adds gamma_8 ~ 8 u sum |c_i| |s|^i <=
+//      8 u M(s) (Higham, Accuracy and Stability of Numerical Algorithms, 2nd ed., Sec. 5.1). In all
+//      38 u M(s) <= 64 u M(s);
+//  (2) the line: p = o + tm d - C is rounded 3 times per component, each relative to <= L, so
+//      |dp| <= 3 sqrt(3) u L <= 6 u L. Moving the line by dp changes f by <= |grad f| |dp|. As
+//      f = ((rho - R)^2 + h^2 - r^2) ((rho + R)^2 + h^2 - r^2) (rho, h: distance from the axis and
+//      height) and the second factor is 4 R rho on the tube, grad f = 8 R r rho n there, |grad f|
+//      <= 8 R r (R + r); doubled for the points off the tube by the tolerances below (<< r):
+//      16 R r (R + r) 6 u L = 96 u R r (R + r) L;
+//  (3) the tracer takes p.d = 0 and so drops the odd terms 2 s (p.d) of |x|^2. The rounding of tm
+//      (the difference C - o, the dot product: <= 8 u (|C| + |o|)) and the component of dp along d
+//      (<= 6 u L) leave |p.d| <= 14 u L; with df / d|x|^2 = 2 (|x|^2 - R^2 - r^2) this changes f by
+//      <= 2 |s| 14 u L |2 (X - R^2 - r^2)|.
+inline double torus_f_error(double R, double r, double pp, double pa, double da, double s, double L) {
+    const double u = kEps / 2, R2 = R * R, abar = pp + R2 + r * r, X = pp + s * s, as = std::fabs(s);
+    const double M = abar * abar + 4 * R2 * (pp + pa * pa) + 8 * R2 * std::fabs(pa * da) * as +
+                     (2 * abar + 4 * R2 * (1 + da * da)) * s * s + s * s * s * s;
+    return u * (64 * M + 96 * R * r * (R + r) * L + 28 * std::fabs(2 * (X - R2 - r * r)) * as * L);
+}
+
+// A simple root t* of f with slope f' and curvature K = f'' there, the computed f within E of the
+// exact one. In the quadratic model f(t* + e) = f' e + K e^2 / 2 the perturbed root solves
+// f' e + K e^2 / 2 = -df (|df| <= E): e = -2 df / (f' + sqrt(f'^2 - 2 K df)), so
+// |e| <= 2 E / |f'| (the square root is real and >= 0 while the root exists), and, from
+// |sqrt a - sqrt b| <= sqrt |a - b| on e = (sqrt(f'^2 - 2 K df) - f') / K, |e| <= sqrt(2 E / |K|),
+// which is the smaller one near tangency (f'^2 < 2 K E): there the root error grows like sqrt(E),
+// i.e. like sqrt(eps). (The model neglects the cubic term, a relative |f'''| e / (3 |K|) ~ e / (3 r)
+// for f''' ~ K / r; the tests do not rely on it to decide whether a root must be found: they check
+// with the exact reference that f changes sign across t* +- e with |f| > E at both ends and that f'
+// has no root in between, and only then require the traced root in the window.) To this the tracer's stopping rule adds 2 ulps of s (a step below
+// 2 eps |s|, Polynomial.h: <= 8 u |s|), t = tm + s one rounding u |t| and the reference's own
+// rounding to double u |t|.
+inline double torus_root(double E, double slope, double curvature, double t, double s) {
+    const double u = kEps / 2;
+    const double simple = slope != 0 ? 2 * E / std::fabs(slope) : INFINITY;
+    const double tangent = curvature != 0 ? std::sqrt(2 * E / std::fabs(curvature)) : INFINITY;
+    return std::fmin(simple, tangent) + 8 * u * std::fabs(s) + 2 * u * std::fabs(t);
+}
+
+// Near a root of multiplicity m (a tangency: m = 2, or higher contact) f(t* + e) = f^(m) e^m / m!
+// to leading order, and a perturbation |df| <= E can only create roots where |f| <= E: within
+// (m! E / |f^(m)|)^(1/m) of t*. For a near-tangent pair of simple roots t1 < t2 (the model
+// f = f_c + K (t - t_c)^2 / 2 about their midpoint t_c, t_{1,2} = t_c -+ sqrt(-2 f_c / K)) the
+// perturbed roots t_c +- sqrt(2 (-f_c - df) / K) lie within sqrt(2 E / K) of [t1, t2]
+// (sqrt(a + b) <= sqrt a + sqrt b). Plus the roundings of torus_root (8 u |s| + 2 u |t|). Any traced
+// root in the band is checked by its residual, |f(t)| <= E + |f'(t)| (8 u |s| + 2 u |t|) (a
+// perturbation of f by E can create a root only where the exact |f| is at most E, up to the
+// stopping slack), and one near an exact tangency also by this window.
+inline double torus_contact_window(double E, int multiplicity, double derivative_m, double t, double s) {
+    const double u = kEps / 2;
+    double factorial = 1;
+    for (int k = 2; k <= multiplicity; ++k) factorial *= k;
+    return std::pow(factorial * E / std::fabs(derivative_m), 1.0 / multiplicity) + 8 * u * std::fabs(s) +
+           2 * u * std::fabs(t);
+}
+
+}  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// A groove's torus as the scene builds it (defects/DefectSolid.cpp make_scratch, U profile, and
+// defects/ScratchPath.cpp circle_surface) against the torus of the scene's nominal numbers: the
+// tube radius rb = (w^2 / 4 + d^2) / (2 d) is 4 roundings from exact, the centre o + u (h0 + s sh
+// + t th) with t = d - rb and the major radius q0 + s sq + t tq a few more each (<= 8 per number),
+// each relative to at most M = |C| + R + r. So every number is within 8 u M of its nominal value
+// and the surface within 3 x 8 u M = 24 u M of the nominal one; a crossing moves along the unit ray
+// by that over |cos| of the incidence, cos = f'(t) / |grad f| = f'(t) / (8 R r rho) on the tube
+// (see torus_f_error).
+inline double torus_built_shift(double magnitude, double cos_incidence) {
+    return 24.0 * (kEps / 2) * magnitude / std::fabs(cos_incidence);
+}
+
+}  // namespace ltm::tol

@@ -23,10 +23,12 @@
 #include <string>
 #include <vector>
 
+#include "geometry/Surface.h"
 #include "scene/SceneLoader.h"
 #include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
 #include "validation/AnalyticScene.h"
+#include "validation/TorusReference.h"
 #include "validation/ValidationTolerance.h"
 
 namespace fs = std::filesystem;
@@ -539,4 +541,78 @@ TEST_F(TraceRaysCommand, ATinyDirectionIsNotTheZeroVector) {
                                 "{\"origin\": [0,0,-10], \"direction\": [0.1,0,1]}\n"
                                 "{\"origin\": [0,0,-10], \"direction\": [1e-171,0,1e-170]}\n");
     expect_same_as_unit(trace(scene, rays));
+}
+
+TEST_F(TraceRaysCommand, AGrazingChordThroughAUGrooveIsFound) {
+    // The reproduction: a window (thickness 6: front face z = -3) with a U scratch on the
+    // front face along the arc of radius 5 about the axis, 30..150 degrees. U profile of width
+    // w = 0.2 and depth d = 0.05: a circular bottom of radius rb = (w^2 / 4 + d^2) / (2 d) = 0.125
+    // whose centre is rb - d = 0.075 outside the glass, so the groove's bottom is the torus of
+    // centre (0, 0, -3.075), axis z, radii 5 and 0.125, lowest point (deepest in the glass)
+    // z = -2.95. At x = 0 (90 degrees) the ray along +y at z = -2.950001 runs 1e-6 mm on the void
+    // side of that point, inside the glass elsewhere: it meets the groove in a chord of
+    // 2 sqrt(rb^2 - (rb - 1e-6)^2) ~ 1e-3 mm, at grazing incidence from the glass (total internal
+    // reflection), and goes on to the rim. The same chord from the other side, and a ray 1e-6 mm
+    // deeper in the glass, which passes under the groove and meets only the rim.
+    const std::string scene_text =
+        std::string("object: {type: window, thickness: 6.0, diameter: 30.0, ior: 1.5}\n"
+                    "defects:\n"
+                    "  - type: scratch\n"
+                    "    surface: front\n"
+                    "    arc: {center: [0.0, 0.0], radius: 5.0, start_angle: 30.0, end_angle: 150.0}\n"
+                    "    width: 0.2\n"
+                    "    depth: 0.05\n"
+                    "    profile: U\n") +
+        kSetup;
+    const fs::path scene = write("groove.yaml", scene_text);
+    const fs::path rays = write("rays.jsonl",
+                                "{\"origin\": [0, 4.5, -2.950001], \"direction\": [0, 1, 0]}\n"
+                                "{\"origin\": [0, 5.5, -2.950001], \"direction\": [0, -1, 0]}\n"
+                                "{\"origin\": [0, 4.5, -2.949999], \"direction\": [0, 1, 0]}\n");
+    const Outcome r = trace(scene, rays);
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto lines = r.lines();
+    ASSERT_EQ(lines.size(), 3u) << r.out;
+
+    // The expected first vertices from the exact torus reference (validation/TorusReference.h) on
+    // the nominal torus; the tolerance (tests/Tolerances.h): the tracer's root error torus_root,
+    // the built torus's offset from the nominal one torus_built_shift, and the rounding of
+    // o + t d (one ulp of y).
+    const ltm::Surface nominal = ltm::Surface::torus({0, 0, -3.075}, {0, 0, 1}, 5.0, 0.125);
+    const double R = nominal.radius, rb = nominal.minor_radius;
+    const double M = length(nominal.origin) + R + rb;
+    for (int k = 0; k < 2; ++k) {
+        SCOPED_TRACE(lines[static_cast<size_t>(k)]);
+        const Vec3 o{0, k == 0 ? 4.5 : 5.5, -2.950001}, d{0, k == 0 ? 1.0 : -1.0, 0};
+        const ltm::validation::TorusReference ref(nominal.origin, nominal.axis, R, rb, o, d);
+        // The full torus: the chord at y ~ 5 and its mirror at y ~ -5 (where the scratch's arc
+        // does not reach); the first root ahead is the chord's near end.
+        ASSERT_EQ(ref.roots().size(), 4u);
+        size_t i = 0;
+        while (i + 1 < 4 && ref.roots()[i].t <= 0) ++i;
+        ASSERT_LT(i + 1, 4u);
+        const ltm::validation::TorusRoot& first = ref.roots()[i];
+        EXPECT_LT(ref.roots()[i + 1].t - first.t, 1.01e-3) << "the chord";
+        EXPECT_GT(ref.roots()[i + 1].t - first.t, 0.99e-3) << "the chord";
+        const double tm = dot(nominal.origin - o, d);
+        const Vec3 p = o + d * tm - nominal.origin;
+        const double E = ltm::tol::torus_f_error(R, rb, dot(p, p), dot(p, nominal.axis), dot(d, nominal.axis), first.t - tm,
+                                                 length(o) + std::fabs(tm) + length(nominal.origin));
+        const double rho = std::fabs(o.y + first.t * d.y);
+        const double cos_incidence = first.slope / (8 * R * rb * rho);
+        const double tol = ltm::tol::torus_root(E, first.slope, first.curvature, first.t, first.t - tm) +
+                           ltm::tol::torus_built_shift(M, cos_incidence) + 2 * (ltm::tol::kEps / 2) * rho;
+        const TracedRay got = parse_line(lines[static_cast<size_t>(k)]);
+        EXPECT_EQ(got.surfaces, (std::vector<std::string>{"scratch 0 bottom", "rim"}));
+        ASSERT_FALSE(got.vertices.empty());
+        EXPECT_EQ(got.vertices[0].x, 0.0);
+        EXPECT_EQ(got.vertices[0].z, -2.950001);
+        EXPECT_LE(std::fabs(got.vertices[0].y - (o.y + first.t * d.y)), tol)
+            << "reference " << o.y + first.t * d.y << ", tolerance " << tol;
+    }
+    // 1e-6 mm deeper: under the groove (the exact f stays positive along the ray), only the rim.
+    const TracedRay under = parse_line(lines[2]);
+    EXPECT_EQ(under.surfaces, (std::vector<std::string>{"rim"})) << lines[2];
+    const ltm::validation::TorusReference miss(nominal.origin, nominal.axis, R, rb, {0, 4.5, -2.949999}, {0, 1, 0});
+    EXPECT_TRUE(miss.roots().empty()) << "the ray passes under the whole torus";
 }
