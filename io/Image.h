@@ -78,7 +78,8 @@ void write_exr(const std::string& path, int width, int height,
 
 // The same channels as a numpy .npz archive (io/Npz.h): one float32 array of shape (height,
 // width) per channel, named as the channel, in C order (row 0 on top), so that numpy reads an
-// image without an EXR library: numpy.load(path)["BrightField"]. Deflate level 6. Atomic.
+// image without an EXR library: numpy.load(path)["BrightField"]. Deflate at
+// io/Npz.h's default level. Atomic.
 void write_npz_channels(const std::string& path, int width, int height,
                         const std::vector<std::pair<std::string, std::vector<float>>>& channels);
 

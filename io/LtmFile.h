@@ -11,7 +11,7 @@
 //     format.npy   '|S3', shape ()          b'csr'
 //     shape.npy    '<i8', shape (2,)        (rows, cols)
 //     data.npy     '<f4', shape (nnz,)      value of each nonzero
-//   Each entry is deflate-compressed by libzip (ZIP method 8, raw deflate stream; level 6 by
+//   Each entry is deflate-compressed by libzip (ZIP method 8, raw deflate stream; level 1 by
 //   default, see below; level 0 stores, ZIP method 0) with its CRC-32, a fixed timestamp
 //   (1980-01-01 00:00) and no extra fields. Each .npy is format version 1.0 (io/Npy.h):
 //   "\x93NUMPY" 1 0, a little-endian uint16 header length, and the header
@@ -22,18 +22,25 @@
 //   get ZIP64 fields and a ZIP64 end record, so files above 4 GiB are written in full (APPNOTE
 //   6.3, as Python's zipfile reads). A small file has none.
 //
-// The default level, 6 (numpy.savez_compressed's), is measured: bench/bench_npz on the T of
-// scenes/paper/bubbles-r1.yaml (10000 x 250000, 63307 nonzeros, 0.55 MB of arrays; its trace took
-// 1.49 s on this 2-core machine), median of 7 writes each:
-//   level 0 (stored)  547617 bytes  0.008 s
-//   level 1           176885 bytes  0.016 s   (1 % of the trace time)
-//   level 6           148744 bytes  0.054 s   (4 %)
-//   level 9           141096 bytes  0.275 s   (18 %)
-// Level 6 is 16 % smaller than level 1 for a write that stays far below the target of a third of
-// the trace time; level 9 saves 5 % more for five times the time (zlib's long match chains are slow
-// on T's repetitive values), which grows with T. The sizes are deterministic; the times vary with
-// the machine's load.
-//
+// The default level, 1, is measured with bench/bench_npz (median of the writes; the sizes are
+// deterministic, the times vary with the machine's load):
+//   T of scenes/paper/bubbles-r1.yaml (10000 x 250000, 63307 nonzeros, 0.55 MB of arrays; its
+//   trace took 1.49 s on this 2-core machine), 7 writes each:
+//     level 0 (stored)  547617 bytes  0.008 s
+//     level 1           176885 bytes  0.016 s   (1 % of the trace time)
+//     level 6           148744 bytes  0.054 s   (4 %)
+//     level 9           141096 bytes  0.275 s   (18 %)
+//   T of scenes/default.yaml (10000 x 250000, 293261 nonzeros, 2.4 MB of arrays; its trace takes
+//   0.21 s), 5 writes each:
+//     level 0 (stored)  2387249 bytes  0.019 s
+//     level 1            482714 bytes  0.024 s   (11 % of the trace time)
+//     level 6            327780 bytes  0.104 s   (50 %)
+//     level 9            308753 bytes  1.971 s   (940 %)
+// Level 1 already removes 80 % of the bytes; level 6 (numpy.savez_compressed's) saves another
+// third of what is left but costs 4x the time, half a trace on the default scene, and level 9's
+// long match chains are slow on T's repetitive values. The write stage of a render is what users
+// wait for, so level 1 it is; any level is read alike (`ltmsim features`, scipy).
+
 // Writing is atomic (io/AtomicFile.h): libzip streams the archive into a new temporary file in the
 // target's folder (".<name>.tmp-<random>"), fsync'ed and renamed onto the path; on any failure the
 // temporary is removed and an existing file at the path is left untouched. The matrix is checked
