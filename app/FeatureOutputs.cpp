@@ -1,5 +1,8 @@
 #include "app/FeatureOutputs.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fmt/format.h>
@@ -93,21 +96,23 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
     const RenderResult& r = run.render;
     try {
         StageTimer t_write(&report, "write");
-        write_ltm_npz((d / "ltm.npz").string(), r.T);
-        written.push_back(d / "ltm.npz");
-        if (!scene.defects.empty()) {
-            std::vector<float> mx(run.reference.size() / 2), my(run.reference.size() / 2);
-            for (size_t k = 0; k < mx.size(); ++k) {
-                mx[k] = run.reference[2 * k];
-                my[k] = run.reference[2 * k + 1];
-            }
-            write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
-                      {{"MeanX", mx}, {"MeanY", my}});
-            written.push_back(d / "reference.exr");
-        }
-        written.push_back(d / "features.exr");
-        written.push_back(d / "features.npz");
-        write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]});
+        // The matrix, the reference and the feature images are independent files: written in
+        // parallel (each atomically). On a failure every one of them is removed.
+        written = {d / "ltm.npz", d / "features.exr", d / "features.npz"};
+        if (!scene.defects.empty()) written.push_back(d / "reference.exr");
+        tbb::parallel_invoke(
+            [&] { write_ltm_npz((d / "ltm.npz").string(), r.T); },
+            [&] {
+                if (scene.defects.empty()) return;
+                std::vector<float> mx(run.reference.size() / 2), my(run.reference.size() / 2);
+                for (size_t k = 0; k < mx.size(); ++k) {
+                    mx[k] = run.reference[2 * k];
+                    my[k] = run.reference[2 * k + 1];
+                }
+                write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
+                          {{"MeanX", mx}, {"MeanY", my}});
+            },
+            [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}); });
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
                        {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}},
@@ -173,15 +178,24 @@ FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const R
 }
 
 void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera) {
-    write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);
-    write_npz_channels((fs::path(dir) / "features.npz").string(), f.width, f.height, f.channels);
     const fs::path pngs = fs::path(dir) / "features";
     fs::create_directories(pngs);
     // Pseudo colour, scaled so a 100-pixel-wide image is ~400 pixels wide.
     const int scale = std::max(1, 400 / std::max(1, f.width));
-    for (const auto& [name, values] : f.channels)
-        write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, feature_title(name), NAN,
-                                NAN, scale, camera);
+    // Every file is independent (and each is atomic), so they are drawn, compressed and fsync'ed
+    // in parallel; the bytes do not depend on the order. A failure is rethrown after the others.
+    const std::size_t n = f.channels.size();
+    tbb::parallel_for(std::size_t(0), n + 2, [&](std::size_t i) {
+        if (i == n) {
+            write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);
+        } else if (i == n + 1) {
+            write_npz_channels((fs::path(dir) / "features.npz").string(), f.width, f.height, f.channels);
+        } else {
+            const auto& [name, values] = f.channels[i];
+            write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, feature_title(name),
+                                    NAN, NAN, scale, camera);
+        }
+    });
 }
 
 }  // namespace ltm::app
