@@ -618,6 +618,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
             if (rec) {
                 rec->vertices.push_back(h.p);
                 rec->tags.push_back(h.tag);
+                rec->media.push_back(st.medium);
             }
             if (to == Medium::Absorber) {
                 ++stats.absorbed_particle;
@@ -688,6 +689,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
         if (!Principal && depth + 1 >= options_.rr_depth) {
             if (rng->uniform() >= options_.rr_survival) {
                 ++stats.roulette_kills;
+                if (rec) rec->roulette = true;
                 st.weight = 0;
                 return;
             }
@@ -718,10 +720,12 @@ PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) 
     st.medium = medium_at(origin);
     if (st.medium == Medium::Absorber) {
         rec.absorbed = true;
+        rec.media.push_back(st.medium);
         rec.direction = st.d;
         return rec;
     }
     run<true>(st, nullptr, stats, &rec);
+    rec.media.push_back(st.medium);
     rec.direction = st.d;
     if (!rec.absorbed && !rec.truncated && !rec.nan && !rec.lost && st.medium == Medium::Air && st.d.z > 0) {
         const double t = (display_.z - st.o.z) / st.d.z;
@@ -731,6 +735,21 @@ PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) 
             rec.display_hit = display_.pixel(rec.x, rec.y, &rec.p, &rec.q) >= 0;
         }
     }
+    return rec;
+}
+
+PrincipalPath Tracer::recorded_path(const Vec3& origin, const Vec3& direction, Medium medium, Rng* rng,
+                                    PathStats& stats) const {
+    ++stats.paths;
+    PrincipalPath rec;
+    State st;
+    st.o = origin;
+    st.d = normalize_any(direction);
+    st.medium = medium;
+    if (rng) run<false>(st, rng, stats, &rec);
+    else run<true>(st, nullptr, stats, &rec);
+    rec.media.push_back(st.medium);
+    rec.direction = st.d;
     return rec;
 }
 
