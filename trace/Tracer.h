@@ -190,6 +190,14 @@ private:
     // cutter walls inside the lens) in (0, tmax), or t = inf.
     // `solved_patch`: an object patch already solved over (0, tmax] by the refinement.
     Hit exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const;
+    // Whether the root at t of surface `tag` along o + t d lies on the glass boundary of the exact
+    // Boolean solid: for an object patch, outside every cutter; for a cutter's wall, where
+    // membership of that cutter changes, within the lens and outside the other cutters (the
+    // guard's own test). Surfaces of no cutter (enclosed ellipsoids, particles) always pass.
+    bool on_glass_boundary(int tag, const Vec3& o, const Vec3& d, double t) const;
+    double lens_slack(int tag, const Vec3& x) const;
+    double guard_step(int tag, const Vec3& x, const Vec3& d, double t) const;
+    std::vector<int> tag_cutter_;  // per surface tag: its cutter's index in cutters_, or -1
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
     std::vector<Vec3> face_normals_;
     std::unique_ptr<EmbreeScene> embree_;
