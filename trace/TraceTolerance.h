@@ -39,13 +39,22 @@ inline constexpr double kSpawnOffsetBounds = 2.0;
 // along the normal instead (which shifts the path sideways by one offset, ~1e-13 L).
 inline constexpr double kSpawnMinCos = 1e-3;
 
-// ---- The exact guard (Tracer::exact_guard) ---------------------------------------------------------
+// ---- The exact guard (Tracer::exact_guard, Tracer::on_glass_boundary) ------------------------------
 // A root of a cutter's surface is a crossing of the glass boundary where membership of the cutter
-// changes across it; membership is tested at t -+ delta with delta = kGuardStep (|t| + L). It
-// must exceed the root's error (~kPointErrorUlps u L / sin(grazing angle) < 1e-13 L for grazing
-// angles above 1e-3) and stay below the smallest feature a scene can hold (the thinnest groove a
-// test uses is 1e-3 mm at L ~ 10 mm, 1e-4 L): 1e-9 L lies 4 orders of magnitude inside both.
-inline constexpr double kGuardStep = 1e-9;
+// changes across it; membership is tested at t -+ delta along the ray. delta must exceed the
+// root's error along the ray (~kPointErrorUlps u L / cos(incidence), and more for a grazing ray)
+// and stay below the smallest feature a scene can hold (the thinnest groove a test uses is 1e-3 mm
+// at L ~ 10 mm, 1e-4 L), and near a corner of a tool's profile (a U's side line meeting its bottom
+// arc, a V's apex) it must stay below the distance to the corner, or the test sees the other wall.
+// So delta = kGuardStepBounds x the root's point error bound (kSpawnOffsetBounds x
+// point_error_bound) / cos, a factor 4 above the error, floored at kPointErrorUlps u (|t| + L);
+// where that exceeds kGuardStepMax (|t| + L) = 1e-9 L (grazing roots), delta is that: 4 orders of
+// magnitude inside both the error and the smallest feature. (Every root used 1e-9 L until
+// tests/trace_stress.cpp found rays within it of such corners refracting at a wall's continuation.)
+// A wall's root counts only inside the lens, up to the rounding of the root and of the lens's
+// distance: kSpawnOffsetBounds x its point error bound.
+inline constexpr double kGuardStepBounds = 4.0;
+inline constexpr double kGuardStepMax = 1e-9;
 
 // ---- Embree candidates (Tracer::next_hit_refined) ------------------------------------------------
 // A candidate's float distance differs from the true facet distance by the float rounding of the

@@ -72,8 +72,14 @@ struct PathStats {
 struct PrincipalPath {
     std::vector<Vec3> vertices;
     std::vector<int> tags;
+    // The medium the tracer believes each segment is in: media[i] is the medium of the segment
+    // ending at vertices[i], media.back() (index vertices.size()) the one the path ends in (the
+    // medium of its last, outgoing ray). Only optical interfaces are vertices: a segment that
+    // crosses a smooth inhomogeneity's boundary (no interface) is recorded under its first medium.
+    std::vector<Medium> media;
     Vec3 direction;
     bool absorbed = false, truncated = false, nan = false, lost = false;
+    bool roulette = false;  // ended by Russian roulette (sampled paths only)
     bool display_hit = false;
     double x = 0, y = 0;
     int p = -1, q = -1;
@@ -106,6 +112,12 @@ public:
     PrincipalPath principal_path(const Vec3& origin, const Vec3& direction) const;
     // One Monte Carlo path with Fresnel reflection or transmission chosen with probability R.
     PathResult sample_path(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats) const;
+    // A read-only hook for tests that judge paths independently (tests/trace_stress.cpp): one path
+    // from `origin`, which the caller says lies in `medium` (the tracer does not look it up), with
+    // every vertex, tag and segment medium recorded. With `rng` the interactions are chosen as in
+    // sample_path (Fresnel, Russian roulette); without, as in principal_path.
+    PrincipalPath recorded_path(const Vec3& origin, const Vec3& direction, Medium medium, Rng* rng,
+                                PathStats& stats) const;
 
     // The next interface along the ray from a point in `medium` (one segment of a path).
     struct FirstHit {
@@ -178,6 +190,14 @@ private:
     // cutter walls inside the lens) in (0, tmax), or t = inf.
     // `solved_patch`: an object patch already solved over (0, tmax] by the refinement.
     Hit exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const;
+    // Whether the root at t of surface `tag` along o + t d lies on the glass boundary of the exact
+    // Boolean solid: for an object patch, outside every cutter; for a cutter's wall, where
+    // membership of that cutter changes, within the lens and outside the other cutters (the
+    // guard's own test). Surfaces of no cutter (enclosed ellipsoids, particles) always pass.
+    bool on_glass_boundary(int tag, const Vec3& o, const Vec3& d, double t) const;
+    double lens_slack(int tag, const Vec3& x) const;
+    double guard_step(int tag, const Vec3& x, const Vec3& d, double t) const;
+    std::vector<int> tag_cutter_;  // per surface tag: its cutter's index in cutters_, or -1
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
     std::vector<Vec3> face_normals_;
     std::unique_ptr<EmbreeScene> embree_;
