@@ -1,6 +1,7 @@
 #include "scene/StrictYaml.h"
 
 #include <fmt/format.h>
+#include <yaml-cpp/eventhandler.h>
 
 #include <algorithm>
 #include <cctype>
@@ -397,21 +398,61 @@ std::string read_file(const std::string& path, const std::string& kind) {
     return text.str();
 }
 
+namespace {
+
+// Where each document of a YAML stream starts, from yaml-cpp's event interface (no nodes built).
+struct DocumentStarts : YAML::EventHandler {
+    std::vector<YAML::Mark> starts;
+    void OnDocumentStart(const YAML::Mark& m) override { starts.push_back(m); }
+    void OnDocumentEnd() override {}
+    void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+    void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+    void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+    void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+    void OnSequenceEnd() override {}
+    void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+    void OnMapEnd() override {}
+};
+
+InputError malformed(const YAML::Exception& e, const std::string& file) {
+    const Loc at = e.mark.is_null() ? Loc{1, 1} : Loc{e.mark.line + 1, e.mark.column + 1};
+    return InputError(file, at.line, at.column, "", "malformed YAML: " + one_line(e.msg));
+}
+
+}  // namespace
+
 YAML::Node parse_document(const std::string& text, const std::string& file, const std::string& kind) {
-    std::vector<YAML::Node> docs;
+    // The documents are counted first. yaml-cpp 0.7 never consumes a ',' outside a flow
+    // collection: YAML::LoadAll(",") returns empty document after empty document until memory
+    // runs out (found by fuzz/fuzz_scene). A document that starts where the previous one started
+    // made no progress, and is reported as the stray character it is.
+    DocumentStarts docs;
     try {
-        docs = YAML::LoadAll(text);
+        std::istringstream in(text);
+        YAML::Parser parser(in);
+        while (parser.HandleNextDocument(docs)) {
+            const std::size_t n = docs.starts.size();
+            if (n >= 2 && docs.starts[n - 1].pos == docs.starts[n - 2].pos) {
+                const YAML::Mark& m = docs.starts[n - 1];
+                const char c = m.pos >= 0 && static_cast<std::size_t>(m.pos) < text.size() ? text[static_cast<std::size_t>(m.pos)] : '?';
+                throw InputError(file, m.line + 1, m.column + 1, "",
+                                 fmt::format("malformed YAML: unexpected '{}' outside a [list] or {{mapping}}", c));
+            }
+        }
     } catch (const YAML::Exception& e) {
-        const Loc at = e.mark.is_null() ? Loc{1, 1} : Loc{e.mark.line + 1, e.mark.column + 1};
-        throw InputError(file, at.line, at.column, "", "malformed YAML: " + one_line(e.msg));
+        throw malformed(e, file);
     }
-    if (docs.size() > 1) {
-        const Loc at = loc_of(docs[1]);
-        throw InputError(file, at.line, at.column, "",
-                         fmt::format("the file holds {} YAML documents (separated by ---); {} holds one", docs.size(),
-                                     with_article(kind)));
+    if (docs.starts.size() > 1) {
+        const YAML::Mark& m = docs.starts[1];
+        throw InputError(file, m.line + 1, m.column + 1, "",
+                         fmt::format("the file holds {} YAML documents (separated by ---); {} holds one",
+                                     docs.starts.size(), with_article(kind)));
     }
-    return docs.empty() ? YAML::Node() : docs.front();
+    try {
+        return YAML::Load(text);
+    } catch (const YAML::Exception& e) {
+        throw malformed(e, file);
+    }
 }
 
 YAML::Node load_document(const std::string& path, const std::string& kind) {

@@ -221,3 +221,19 @@ TEST(InlineScene, WithoutPrefixThePathsOfAFile) {
 
 }  // namespace
 }  // namespace ltm
+
+// yaml-cpp 0.7 loops forever on a ',' outside a flow collection (YAML::LoadAll(",") returns empty
+// documents until memory runs out; found by fuzz/fuzz_scene). It is a located error instead.
+TEST(StrictYaml, AStrayCommaIsAnErrorNotAHang) {
+    for (const char* text : {",", "# c\n\n  ,\n", ", ,"}) {
+        SCOPED_TRACE(text);
+        try {
+            ltm::yaml::parse_document(text, "s.yaml", "scene file");
+            ADD_FAILURE() << "parsed";
+        } catch (const ltm::InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("unexpected ','"), std::string::npos) << e.what();
+            EXPECT_GE(e.line, 1);
+        }
+    }
+    EXPECT_EQ(ltm::yaml::parse_document("a: 1\n", "s.yaml", "scene file")["a"].as<int>(), 1);
+}
