@@ -400,18 +400,24 @@ std::string read_file(const std::string& path, const std::string& kind) {
 
 namespace {
 
-// Where each document of a YAML stream starts, from yaml-cpp's event interface (no nodes built).
+// Where each document of a YAML stream starts, and where its root node is, from yaml-cpp's event
+// interface (no nodes are built).
 struct DocumentStarts : YAML::EventHandler {
-    std::vector<YAML::Mark> starts;
+    std::vector<YAML::Mark> starts, roots;
     void OnDocumentStart(const YAML::Mark& m) override { starts.push_back(m); }
     void OnDocumentEnd() override {}
-    void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
-    void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-    void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
-    void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+    void OnNull(const YAML::Mark& m, YAML::anchor_t) override { node(m); }
+    void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { node(m); }
+    void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t, const std::string&) override { node(m); }
+    void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+        node(m);
+    }
     void OnSequenceEnd() override {}
-    void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+    void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override { node(m); }
     void OnMapEnd() override {}
+    void node(const YAML::Mark& m) {
+        if (roots.size() < starts.size()) roots.push_back(m);
+    }
 };
 
 InputError malformed(const YAML::Exception& e, const std::string& file) {
@@ -443,7 +449,7 @@ YAML::Node parse_document(const std::string& text, const std::string& file, cons
         throw malformed(e, file);
     }
     if (docs.starts.size() > 1) {
-        const YAML::Mark& m = docs.starts[1];
+        const YAML::Mark& m = docs.roots.size() > 1 ? docs.roots[1] : docs.starts[1];
         throw InputError(file, m.line + 1, m.column + 1, "",
                          fmt::format("the file holds {} YAML documents (separated by ---); {} holds one",
                                      docs.starts.size(), with_article(kind)));
