@@ -504,6 +504,32 @@ inline double torus_contact_window(double E, int multiplicity, double derivative
     return std::pow(factorial * E / std::fabs(derivative_m), 1.0 / multiplicity) + 8 * u * std::fabs(s) +
            2 * u * std::fabs(t);
 }
+// ==== trace_render: defect walls refined from the mesh against closed forms =======================
+// (This section and the "moved literals" sections below belong to the tests' tolerance move; the
+// torus tolerances are kept elsewhere, so the two can be merged section by section.)
+
+// A principal path of the refined tracer against the closed-form tracer of the test (planes,
+// cylinders and balls intersected in double, Snell's law in vector form): two independent
+// computations of the same exact path, each with validation/ValidationTolerance.h's bound
+// 64 (n + 1) u L (1 + kappa) (<= 64 roundings per interface, n interfaces plus the propagation to
+// the display, kappa the path's sensitivity, L its length scale); the test's closed form is that
+// count's own operations (the ball as AnalyticScene's sphere, a plane or a half-space clip ~6,
+// the cylinder ~25) and the tracer's refinement solves the same roots of its tagged surfaces
+// (trace/Intersect.cpp: the same counts), its spawn step moving the origin along the new ray (no
+// sideways error beyond one rounding of |o| <= L). Their difference: 2 x 64 (n + 1) u L (1 + kappa).
+// A mesh hit left unrefined is off by the facet's float rounding (~1e-7 relative) or its chord
+// error (up to ~5e-4 mm here): 1e4 times more than this for the scenes tested.
+inline double refined_path_position(int interfaces, double L, double kappa) {
+    return 2.0 * 64.0 * (interfaces + 1) * (kEps / 2) * L * (1.0 + kappa);
+}
+// The same for the final direction (rad): L = 1 and kappa_dir.
+inline double refined_path_direction(int interfaces, double kappa_dir) {
+    return 2.0 * 64.0 * (interfaces + 1) * (kEps / 2) * (1.0 + kappa_dir);
+}
+// A unit direction computed from two vertices each within e of exact, a distance l apart: the
+// difference vector is within 2 e, and normalising a vector of length l turns it by at most
+// 2 e / l (plus a few u, far below e / l for e >= 64 u L and l <= L).
+inline double direction_from_vertices(double vertex_error, double l) { return 2.0 * vertex_error / l; }
 
 }  // namespace ltm::tol
 
@@ -520,5 +546,140 @@ namespace ltm::tol {
 inline double torus_built_shift(double magnitude, double cos_incidence) {
     return 24.0 * (kEps / 2) * magnitude / std::fabs(cos_incidence);
 }
+
+// ==== moved literals: geometry, intersections, sampling (were bare numbers in the tests) ==========
+// u = eps / 2 below. "k roundings relative to M": a result reached through a chain of k correctly
+// rounded operations on operands of magnitude <= M is within gamma_k M ~ k u M of exact (Higham,
+// Accuracy and Stability, 2nd ed., Lemma 3.1); libm's sin, cos, asin, atan2 are within 1 ulp,
+// counted as 2 roundings.
+
+// defects_sampling: a face point (rho cos phi, rho sin phi, z(rho)) against z evaluated at
+// rho' = hypot(x, y): cos, sin (2 roundings each), the two products and hypot put rho' within
+// 8 u rho of rho, which moves z by slope x 8 u a (slope = |dz / drho| <= a / sqrt(R^2 - a^2) on a
+// spherical cap); the two evaluations of z (the same function, ~8 roundings of |z| <= z_max each)
+// add 16 u z_max. Doubled: 16 u (a slope + 2 z_max). (Was 1e-12: tightened.)
+inline double face_point_height(double a, double slope, double z_max) {
+    return 16.0 * (kEps / 2) * (a * slope + 2.0 * z_max);
+}
+
+// defects_sampling: Euler angles (degrees) -> rotation -> Euler angles. The input angles become
+// radians with 2 roundings (<= 2 pi u absolute each), which moves R's entries by <= 6 pi u < 19 u;
+// each entry (<= 2 products of 3 sines and cosines, a sum) adds <= 8 u: <= 27 u < 32 u. Recovering
+// beta = asin(-R20) divides an entry error by cos(beta); alpha, gamma = atan2 of two entries of
+// magnitude cos(beta): an angle error <= 32 u / cos(beta), plus atan2's own 2 u |angle| <= 2 pi u;
+// back to degrees x 180 / pi and 2 more roundings of |e| <= 180. Doubled:
+//   ((64 / cos(beta) + 4 pi) u) 180 / pi + 720 u.
+// For |beta| <= 89 degrees (cos >= 0.01745) this is <= 2.4e-11 degrees. (Was 1e-9: tightened.)
+inline double euler_roundtrip_deg(double cos_beta) {
+    return (64.0 / cos_beta + 4.0 * 3.141592653589793) * (kEps / 2) * (180.0 / 3.141592653589793) +
+           720.0 * (kEps / 2);
+}
+// ... and at gimbal lock (beta = +-90), the rotation rebuilt from the recovered angles against the
+// original, entry by entry: R's entries within 27 u (above), the recovered combination angle from
+// atan2 of two entries of magnitude 1 within 27 u + 2 pi u, its trip through degrees 4 pi u, the
+// rebuilt entries' own 8 u plus that angle error, and the cos(fl(pi/2)) = 6e-17 left of the exact
+// gimbal identity (< u): < 27 + 8 + 33 + 13 + 1 < 82 u; 128 u = 64 eps. (Was 1e-12: tightened.)
+inline double gimbal_roundtrip_entry() { return 64.0 * kEps; }
+
+// geometry_export: the signed volume of a closed mesh, sum over faces of det(p0, p1, p2) / 6, for
+// a small mesh against a reference sum: each determinant within 8 u of the product of its edge
+// lengths, each of the `terms` additions within u of the absolute sum S of the terms (both sums'
+// terms counted in S), the division 1 more: (terms + 16) u S.
+// (Was 1e-12; the integer vertices here make most operations exact: tightened.)
+inline double mesh_signed_volume(int terms, double abs_sum) { return (terms + 16) * (kEps / 2) * abs_sum; }
+
+// geometry_lens: Lens::volume = pi a^2 t + sag_volume(r2) - sag_volume(r1), each term <= 12
+// roundings relative to itself, two sums, against a closed form of <= 8 roundings: 32 u S, S the
+// sum of the terms' magnitudes. (Was 1e-12 V: tightened.)
+inline double lens_volume(double abs_terms) { return 32.0 * (kEps / 2) * abs_terms; }
+// ... against 64-point Gauss-Legendre quadrature of (z_back - z_front) 2 pi rho: truncation is
+// negligible (the integrand's nearest singularity is the branch point rho = |R| >= 30 for the
+// lenses tested, a = 12.5: Bernstein parameter rho_B = 3.8 + sqrt(3.8^2 - 1) = 7.5 for [0, 1],
+// error ~ rho_B^-128 < 1e-100); rounding: the nodes are Newton-converged to |dz| < 1e-16 (a few u),
+// the weights 1 / ((1 - z^2) P_n'^2) carry the stable three-term recurrence's ~2 n u = 128 u
+// squared: 256 u; the 64-term sum 64 u; each integrand's difference z_back - z_front 8 u (|z_b| +
+// |z_f|) / (z_b - z_f) <= 40 u (the ratio is <= 5 here); the closed form 32 u: < 400 u; 512 u
+// relative. (Was 1e-12 relative: tightened.)
+inline double quadrature_volume_relative() { return 512.0 * (kEps / 2); }
+// ... a cap's area 2 pi |R| sag against 2 pi a^2: ~6 roundings each side: 16 u A. (Was 1e-12.)
+inline double cap_area(double A) { return 16.0 * (kEps / 2) * A; }
+// ... distances of points with small integer coordinates to the faces and rim of the lens
+// (50, -50, 6, 25): the nearest points are found through a distance to the sphere's centre
+// |p - c| - |R| = 47 - 50 and |rho - a| = 12.5, exact in double (integers and halves, a square
+// root of a perfect square is correctly rounded to it): error 0 up to the final rounding of the
+// result, <= u |v|. 2 eps |v| leaves a factor 4. (Was 1e-14: tightened.)
+inline double exact_operands(double v) { return 2.0 * kEps * std::fabs(v); }
+// ... the distance from a point to a cap's edge circle, hypot(rho - a, z - z_edge), with
+// z = z_edge - 4 computed: z - z_edge carries 2 roundings of magnitude M = |z_edge| + 4, hypot and
+// rho - a 2 more of the result: 16 u M covers them with a factor 2. (Was 1e-12: tightened.)
+inline double cap_edge_distance(double M) { return 16.0 * (kEps / 2) * M; }
+
+// geometry_surface: distances, projections and normals at points with small integer coordinates
+// and results of magnitude <= 4: each side (the code and the test's closed form, e.g. 1 + 2 x 0.6
+// for a projection onto a sphere of radius 2 along (3, 4, 0) / 5) is <= 4 correctly rounded
+// operations on exact operands or correctly rounded constants (0.6, 0.8, sqrt 2, tan(pi / 4)).
+// The values before each side's last rounding differ from the exact result by <= 3 u |q|, so the
+// two rounded results differ by at most 2 ulps of |q| <= 4 when |q| < 2, one of |q| in [2, 4)
+// (ulp = 4.4e-16 there): <= 8.9e-16 in every case, below the literal 1e-15, which is kept (a
+// plain count k u M with margin would allow ~2e-15: the literal is tighter than that count and
+// holds by this ulp argument).
+constexpr double kSurfaceExampleAbs = 1e-15;
+// ... a cone's distance to its own projection of a point (|x| <= 5.5): a plain count (the
+// projection's ~12 roundings and the distance's ~8, 20 u x 5.5 = 1.2e-14) exceeds the literal
+// 1e-14, which is kept: the projection lands on the generator line of the point's own meridian
+// coordinates (q, h), which the distance evaluation recomputes from the projected point, so the
+// rounding of the meridian frame cancels to first order and only the two evaluations' final
+// ~8 roundings each remain: <= 16 u 5.5 = 9.8e-15.
+constexpr double kConeProjectionAbs = 1e-14;
+// ... the closest / farthest point of an ellipsoid (semi-axes >= 0.4) from the bisection for the
+// Lagrange multiplier t, to full precision: f(x) - 1 = F(t) evaluated, <= |F'(t)| ulp(t) (the last
+// bracket) + ~16 u; F' = -2 sum e_i^2 y_i^2 / (t + e_i^2)^3 is <= ~1e3 for the test's points
+// (|y| <= 6 sqrt 3, t + e_i^2 >= ~0.1 away from the pole for points off the axes; the on-axis and
+// inside trials were the literal's origin): ~1e-12. Kept.
+constexpr double kEllipsoidExtremeOnSurface = 1e-12;
+// ... an ellipsoid with equal semi-axes 2 at centre (1, 1, 1), rotated: the distance goes through
+// the frame (9 products, 6 sums, with cos/sin of the rotation: 20 roundings of magnitude <= 4)
+// and the scaled radius: 32 u x 4 = 1.4e-14. (Was 1e-12: tightened.)
+inline double rotated_ellipsoid_distance() { return 32.0 * (kEps / 2) * 4.0; }
+
+// study_ground_truth: areas of a unit disk within boxes. The whole disk, the half and the
+// quarter are exact: at the breakpoints x = +-1, 0 the primitive is (x sqrt(1 - x^2) + asin x) / 2
+// with sqrt(0) = 0 and asin(+-1) = +-fl(pi / 2) (correctly rounded), so every piece is fl(pi / 2)
+// times a power of 2, equal to fl(pi), fl(pi / 2), fl(pi / 4) as M_PI's expressions are; the box
+// inside the disk is y (b - a) on halves: 1 exactly. The segment x > 1/2 (acos 0.5 - 0.5 sqrt 0.75
+// = 0.614) goes through asin(0.5) (correctly rounded to fl(pi / 6) in glibc), sqrt(0.75), 0.5 x
+// and two differences of values < 1.6 rounded to results < 1: <= 5 roundings of ulp <= 2.2e-16,
+// i.e. <= 5.6e-16 for each side, < 1e-15 for the two. The literal is kept (a plain 8 u M count
+// with M = pi would allow 2.8e-15: the literal is tighter and holds by this).
+constexpr double kDiskAreaAbs = 1e-15;
+// ... the summed footprint fractions of a defect against (1 - R0) pi r^2 / A_pixel: a Monte Carlo
+// estimate whose standard error is below sqrt(perimeter pixels / samples) ~ 0.2 pixels (only
+// pixels on the disk's edge are fractional): 1 pixel is > 5 standard errors. Kept.
+constexpr double kFootprintPixels = 1.0;
+
+// trace_grin: the arc length of a parabolic graded-index path: GrinPath.h's Gauss-Legendre is
+// refined to 1e-12 relative (its own stated accuracy); the closed form's rounding is ~1e-14
+// relative. Kept: that is the code's contract.
+constexpr double kGrinArcLengthRelative = 1e-12;
+
+// trace_optics: intersection roots against exact values.
+// A plane: t = dot(origin - o, axis) / dot(d, axis), d = (0, 3, 4) / 5 normalised (0.6, 0.8 within
+// u), the dot of integers exact, the quotient u: within 4 u |t|; 8 u |t| with margin.
+// (Was 1e-14: tightened.)
+inline double plane_root(double t) { return 8.0 * (kEps / 2) * std::fabs(t); }
+// A root of a t^2 + b t + c = 0 whose coefficients are each within 10 u of their magnitudes
+// (a <= 1, |b| <= 2 M, |c| <= M^2, with M = |o - apex| or |o - centre| + radius; the cone's
+// cos^2(angle) adds 2 u relative): the coefficient errors move the root by (|da| t^2 + |db| t +
+// |dc|) / |p'(t)| <= 10 u (t + M)^2 / sqrt(D) (|p'| = sqrt(D) at a root, D the discriminant);
+// solving (the discriminant's rounding relative to b^2 + 4 |a c| <= 8 (t + M)^2, halved by the
+// square root) as much again: 32 u (t + M)^2 / sqrt(D) with margin. (Was 1e-12: tightened.)
+inline double quadratic_root(double t, double M, double sqrt_disc) {
+    return 32.0 * (kEps / 2) * (t + M) * (t + M) / sqrt_disc;
+}
+
+// trace_render, validation_render: the entries of T are float32 of (count / n): n x float(c / n) is
+// within n 2^-24 (c / n) <= 2^-24 n... relative to c <= n: |n T - c| <= 2^-24 c <= 2^-24 n.
+// (Was 1e-5 for n = 36: tightened to 2.1e-6.)
+inline double float_count(int n) { return std::ldexp(static_cast<double>(n), -24); }
 
 }  // namespace ltm::tol

@@ -72,8 +72,9 @@ TEST(Lens, SagIsStableForFlatSurfaces) {
 TEST(Lens, VolumeMatchesClosedFormsAndQuadrature) {
     // Hemisphere (r1 = a) on a cylinder of height 1: V = 2/3 pi a^3 + pi a^2 (t - a).
     const Lens h({5.0, INFINITY, 6.0, 10.0, 1.5});
-    EXPECT_NEAR(h.volume(), 2.0 / 3.0 * kPi * 125 + kPi * 25 * 1.0, 1e-12 * h.volume());
-    EXPECT_NEAR(h.front_area(), 2 * kPi * 25, 1e-12);  // hemisphere: 2 pi a^2
+    EXPECT_NEAR(h.volume(), 2.0 / 3.0 * kPi * 125 + kPi * 25 * 1.0,
+                tol::lens_volume(kPi * 25 * 6.0 + 2.0 / 3.0 * kPi * 125));
+    EXPECT_NEAR(h.front_area(), 2 * kPi * 25, tol::cap_area(2 * kPi * 25));  // hemisphere: 2 pi a^2
     // Every kind: V = int_0^a (z_back - z_front) 2 pi rho d rho by 64-point Gauss-Legendre (the
     // integrand is analytic on [0, a] for |R| > a; the rule is exact to double precision).
     std::vector<double> x, w;
@@ -86,7 +87,7 @@ TEST(Lens, VolumeMatchesClosedFormsAndQuadrature) {
             const double rho = a * x[i];
             v += w[i] * a * (lens.z_back(rho) - lens.z_front(rho)) * 2 * kPi * rho;
         }
-        EXPECT_NEAR(lens.volume(), v, 1e-12 * v) << k.name;
+        EXPECT_NEAR(lens.volume(), v, tol::quadrature_volume_relative() * v) << k.name;
     }
 }
 
@@ -107,13 +108,13 @@ TEST(Lens, RejectsImpossibleGeometry) {
 TEST(Lens, PatchDistancesAreExact) {
     const Lens lens({50, -50, 6, 25, 1.5});
     // On the axis the front vertex is 3 mm below the centre; the rim is 12.5 mm away.
-    EXPECT_NEAR(lens.distance_to_front({0, 0, 0}), 3.0, 1e-14);
-    EXPECT_NEAR(lens.distance_to_rim({0, 0, 0}), 12.5, 1e-14);
-    EXPECT_NEAR(lens.signed_distance({0, 0, 0}), 3.0, 1e-14);
+    EXPECT_NEAR(lens.distance_to_front({0, 0, 0}), 3.0, tol::exact_operands(3.0));
+    EXPECT_NEAR(lens.distance_to_rim({0, 0, 0}), 12.5, tol::exact_operands(12.5));
+    EXPECT_NEAR(lens.signed_distance({0, 0, 0}), 3.0, tol::exact_operands(3.0));
     EXPECT_LT(lens.signed_distance({0, 0, 10}), 0.0);
     // Outside the aperture the nearest cap point is its edge circle.
     const double ze = lens.z_front(12.5);
-    EXPECT_NEAR(lens.distance_to_front({15.5, 0, ze - 4}), 5.0, 1e-12);
+    EXPECT_NEAR(lens.distance_to_front({15.5, 0, ze - 4}), 5.0, tol::cap_edge_distance(std::fabs(ze) + 4.0 + 5.0));
 }
 
 class LensTessellationTest : public ::testing::TestWithParam<std::tuple<int, double, double>> {};

@@ -22,9 +22,9 @@ TEST(Surface, PlaneSphereCylinderDistances) {
     EXPECT_DOUBLE_EQ(c.signed_distance({0, 0, 7}), -3.0);
     // Projections land on the surface and the normal is the unit gradient.
     const Vec3 q = s.project({4, 6, 3});  // direction (3, 4, 0) / 5
-    EXPECT_NEAR(q.x, 1 + 2 * 0.6, 1e-15);
-    EXPECT_NEAR(q.y, 2 + 2 * 0.8, 1e-15);
-    EXPECT_NEAR(length(c.normal({0, 5, 1}) - Vec3{0, 1, 0}), 0.0, 1e-15);
+    EXPECT_NEAR(q.x, 1 + 2 * 0.6, tol::kSurfaceExampleAbs);
+    EXPECT_NEAR(q.y, 2 + 2 * 0.8, tol::kSurfaceExampleAbs);
+    EXPECT_NEAR(length(c.normal({0, 5, 1}) - Vec3{0, 1, 0}), 0.0, tol::kSurfaceExampleAbs);
 }
 
 TEST(Surface, TorusAndCone) {
@@ -36,10 +36,10 @@ TEST(Surface, TorusAndCone) {
     // Cone, apex at the origin, half-angle 45 deg: the point (2, 0, 0) is sqrt(2) from the
     // generator line q = h, and on its outside (away from the axis).
     const Surface k = Surface::cone({0, 0, 0}, {0, 0, 1}, kPi / 4);
-    EXPECT_NEAR(k.signed_distance({2, 0, 0}), std::sqrt(2.0), 1e-15);
-    EXPECT_NEAR(k.signed_distance({0, 0, 2}), -std::sqrt(2.0), 1e-15);
-    EXPECT_NEAR(k.signed_distance({0, 3, -3}), 0.0, 1e-15);  // the lower nappe
-    EXPECT_NEAR(k.signed_distance(k.project({1, 2, 5})), 0.0, 1e-14);
+    EXPECT_NEAR(k.signed_distance({2, 0, 0}), std::sqrt(2.0), tol::kSurfaceExampleAbs);
+    EXPECT_NEAR(k.signed_distance({0, 0, 2}), -std::sqrt(2.0), tol::kSurfaceExampleAbs);
+    EXPECT_NEAR(k.signed_distance({0, 3, -3}), 0.0, tol::kSurfaceExampleAbs);  // the lower nappe
+    EXPECT_NEAR(k.signed_distance(k.project({1, 2, 5})), 0.0, tol::kConeProjectionAbs);
 }
 
 TEST(Surface, EulerRotationIsOrthonormal) {
@@ -49,7 +49,7 @@ TEST(Surface, EulerRotationIsOrthonormal) {
         for (int b = 0; b < 3; ++b) EXPECT_NEAR(i(a, b), a == b ? 1.0 : 0.0, 4 * tol::kEps);
     // 90 degrees about z sends +x to +y.
     const Vec3 y = rotation_from_euler_deg({0, 0, 90}) * Vec3{1, 0, 0};
-    EXPECT_NEAR(y.y, 1.0, 1e-15);
+    EXPECT_NEAR(y.y, 1.0, tol::kSurfaceExampleAbs);
 }
 
 // The closest point x of an ellipsoid to y satisfies: x on the ellipsoid, and y - x parallel to the
@@ -72,7 +72,7 @@ TEST(Surface, EllipsoidExtremePointsSatisfyLagrangeConditions) {
         for (bool farthest : {false, true}) {
             const Vec3 x = farthest ? ellipsoid_farthest_point(e, y) : ellipsoid_closest_point(e, y);
             const double f = (x.x / e.x) * (x.x / e.x) + (x.y / e.y) * (x.y / e.y) + (x.z / e.z) * (x.z / e.z);
-            EXPECT_NEAR(f, 1.0, 1e-12);
+            EXPECT_NEAR(f, 1.0, tol::kEllipsoidExtremeOnSurface);
             const Vec3 grad = normalize(Vec3{x.x / (e.x * e.x), x.y / (e.y * e.y), x.z / (e.z * e.z)});
             const Vec3 d = y - x;
             EXPECT_LE(length(cross(grad, d)), 1e-9 * std::max(1.0, length(d)));
@@ -88,6 +88,6 @@ TEST(Surface, EllipsoidExtremePointsSatisfyLagrangeConditions) {
 TEST(Surface, EllipsoidSignedDistanceMatchesSphere) {
     // An ellipsoid with equal semi-axes is a sphere: distance |p - c| - r.
     const Surface e = Surface::ellipsoid({1, 1, 1}, rotation_from_euler_deg({10, 20, 30}), {2, 2, 2});
-    EXPECT_NEAR(e.signed_distance({1, 1, 5}), 2.0, 1e-12);
-    EXPECT_NEAR(e.signed_distance({1.5, 1, 1}), -1.5, 1e-12);
+    EXPECT_NEAR(e.signed_distance({1, 1, 5}), 2.0, tol::rotated_ellipsoid_distance());
+    EXPECT_NEAR(e.signed_distance({1.5, 1, 1}), -1.5, tol::rotated_ellipsoid_distance());
 }

@@ -143,13 +143,13 @@ SceneRun run(const test::Built& b) {
 
 TEST(GroundTruth, DiskAreaIsExact) {
     // Whole disk, half disk, a quadrant, a box inside the disk, and one off it.
-    EXPECT_NEAR(disk_rectangle_area(1, -2, 2, -2, 2), M_PI, 1e-15);
-    EXPECT_NEAR(disk_rectangle_area(1, 0, 2, -2, 2), M_PI / 2, 1e-15);
-    EXPECT_NEAR(disk_rectangle_area(1, 0, 2, 0, 2), M_PI / 4, 1e-15);
-    EXPECT_NEAR(disk_rectangle_area(1, -0.5, 0.5, -0.5, 0.5), 1.0, 1e-15);
+    EXPECT_NEAR(disk_rectangle_area(1, -2, 2, -2, 2), M_PI, tol::kDiskAreaAbs);
+    EXPECT_NEAR(disk_rectangle_area(1, 0, 2, -2, 2), M_PI / 2, tol::kDiskAreaAbs);
+    EXPECT_NEAR(disk_rectangle_area(1, 0, 2, 0, 2), M_PI / 4, tol::kDiskAreaAbs);
+    EXPECT_NEAR(disk_rectangle_area(1, -0.5, 0.5, -0.5, 0.5), 1.0, tol::kDiskAreaAbs);
     EXPECT_EQ(disk_rectangle_area(1, 1.1, 2, -2, 2), 0.0);
     // The segment x > 1/2: r^2 acos(d / r) - d sqrt(r^2 - d^2).
-    EXPECT_NEAR(disk_rectangle_area(1, 0.5, 2, -2, 2), std::acos(0.5) - 0.5 * std::sqrt(0.75), 1e-15);
+    EXPECT_NEAR(disk_rectangle_area(1, 0.5, 2, -2, 2), std::acos(0.5) - 0.5 * std::sqrt(0.75), tol::kDiskAreaAbs);
 }
 
 TEST(GroundTruth, EnclosedDefectsInAWindowAtNormalIncidenceMatchTheirDisks) {
@@ -184,7 +184,7 @@ seed: 3
         // The summed fractions estimate (1 - R0) pi r^2 / A_pixel; its standard error is below
         // sqrt(perimeter pixels / n) ~ 0.2 pixels, so 1 pixel is > 5 sigma.
         const Defect& d = b.scene.defects[static_cast<size_t>(L.id - 1)];
-        EXPECT_NEAR(L.path_pixels, (1 - R0) * M_PI * d.semi_axes.x * d.semi_axes.x / 0.0625, 1.0);
+        EXPECT_NEAR(L.path_pixels, (1 - R0) * M_PI * d.semi_axes.x * d.semi_axes.x / 0.0625, tol::kFootprintPixels);
     }
     // bbox and area agree with the mask.
     for (const DefectLabel& L : g.defects) {

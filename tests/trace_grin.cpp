@@ -147,7 +147,7 @@ TEST(Grin, ArcLengthOfTheParabolaMatchesItsClosedForm) {
                              std::log((2 * std::sqrt(C * X) + 2 * C * tau + B) / (2 * std::sqrt(C * A) + B));
         // The quadrature is refined to 1e-12 relative (GrinPath.h); the closed form's own
         // rounding is ~1e-14 relative.
-        EXPECT_NEAR(path.arc_length(tau), S, 1e-12 * S) << tau;
+        EXPECT_NEAR(path.arc_length(tau), S, tol::kGrinArcLengthRelative * S) << tau;
     }
 }
 

@@ -74,7 +74,8 @@ TEST(Intersect, SphereRootsAndTheStableQuadratic) {
     const double h = 1.999999;
     r = intersect(Surface::sphere({0, 0, 10}, 2.0), {h, 0, 0}, {0, 0, 1});
     ASSERT_EQ(r.count, 2);
-    EXPECT_NEAR(r.t[1] - r.t[0], 2 * std::sqrt((2 - h) * (2 + h)), 1e-12);
+    EXPECT_NEAR(r.t[1] - r.t[0], 2 * std::sqrt((2 - h) * (2 + h)),
+                2 * tol::single_intersection(std::hypot(h, 10.0) + 2.0));  // two roots
     // Missing ray.
     EXPECT_EQ(intersect(Surface::sphere({0, 0, 10}, 2.0), {2.1, 0, 0}, {0, 0, 1}).count, 0);
 }
@@ -82,7 +83,7 @@ TEST(Intersect, SphereRootsAndTheStableQuadratic) {
 TEST(Intersect, PlaneCylinderConeTorusEllipsoid) {
     Roots r = intersect(Surface::plane({0, 0, 5}, {0, 0, -1}), {1, 2, 0}, normalize(Vec3{0, 3, 4}));
     ASSERT_EQ(r.count, 1);
-    EXPECT_NEAR(r.t[0], 25.0 / 4.0, 1e-14);  // z = 4 t / 5 = 5
+    EXPECT_NEAR(r.t[0], 25.0 / 4.0, tol::plane_root(25.0 / 4.0));  // z = 4 t / 5 = 5
     r = intersect(Surface::cylinder({0, 0, 0}, {0, 0, 1}, 3.0), {-10, 0, 7}, {1, 0, 0});
     ASSERT_EQ(r.count, 2);
     EXPECT_DOUBLE_EQ(r.t[0], 7.0);
@@ -90,18 +91,24 @@ TEST(Intersect, PlaneCylinderConeTorusEllipsoid) {
     // Cone with apex at the origin, half-angle 45 deg, axis z: the line x = 1, along z meets it at z = -+1.
     r = intersect(Surface::cone({0, 0, 0}, {0, 0, 1}, kPi / 4), {1, 0, -5}, {0, 0, 1});
     ASSERT_EQ(r.count, 2);
-    EXPECT_NEAR(r.t[0], 4.0, 1e-12);
-    EXPECT_NEAR(r.t[1], 6.0, 1e-12);
+    // 0.5 t^2 - 5 t + 12 = 0 (M = |o| = sqrt 26, D = 1).
+    EXPECT_NEAR(r.t[0], 4.0, tol::quadratic_root(4.0, std::sqrt(26.0), 1.0));
+    EXPECT_NEAR(r.t[1], 6.0, tol::quadratic_root(6.0, std::sqrt(26.0), 1.0));
     // Torus R = 3, r = 1 about z: the x axis crosses it at x = -4, -2, 2, 4.
     r = intersect(Surface::torus({0, 0, 0}, {0, 0, 1}, 3.0, 1.0), {-10, 0, 0}, {1, 0, 0});
     ASSERT_EQ(r.count, 4);
     const double expected[4] = {6, 8, 12, 14};
-    for (int i = 0; i < 4; ++i) EXPECT_NEAR(r.t[i], expected[i], 1e-12);
+    // s = t - 10 solves s^4 - 20 s^2 + 64 = 0 (exact integer coefficients), then t = s + 10.
+    for (int i = 0; i < 4; ++i) {
+        const double s = expected[i] - 10, abs_sum = 64 + 20 * s * s + s * s * s * s, slope = 4 * s * s * s - 40 * s;
+        EXPECT_NEAR(r.t[i], expected[i], tol::poly_root(4, abs_sum, slope) + 2 * tol::kEps * 14);
+    }
     // Ellipsoid with semi-axes (4, 2, 1), rotated 90 deg about z (its long axis along y).
     r = intersect(Surface::ellipsoid({0, 0, 0}, rotation_from_euler_deg({0, 0, 90}), {4, 2, 1}), {0, -10, 0}, {0, 1, 0});
     ASSERT_EQ(r.count, 2);
-    EXPECT_NEAR(r.t[0], 6.0, 1e-12);
-    EXPECT_NEAR(r.t[1], 14.0, 1e-12);
+    // In the unit-sphere frame: a root of a sphere hit from |o - c| = 10 with semi-axes <= 4.
+    EXPECT_NEAR(r.t[0], 6.0, tol::single_intersection(10.0 + 4.0));
+    EXPECT_NEAR(r.t[1], 14.0, tol::single_intersection(10.0 + 4.0));
 }
 
 TEST(Intersect, ErrorBoundCoversTheComputedPoint) {
