@@ -124,7 +124,7 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
 }
 
 RenderGeometry render_geometry(const Scene& s) {
-    return {s.camera.resolution[0], s.camera.resolution[1],
+    return {s.camera.resolution[0], s.camera.resolution[1], {s.camera.size[0], s.camera.size[1]},
             {s.display.resolution[0], s.display.resolution[1], s.display.size[0], s.display.size[1]}};
 }
 
@@ -143,6 +143,12 @@ RenderGeometry read_render_geometry(const std::string& dir) {
     g.display.P = static_cast<int>(display[1]);
     g.display.width = size[0];
     g.display.height = size[1];
+    // The camera's field of view only labels the previews' axes: without it they have none.
+    try {
+        const auto fov = numbers_at(root, {"scene", "camera", "size"}, 2, file);
+        g.camera = {fov[0], fov[1]};
+    } catch (const std::runtime_error&) {
+    }
     return g;
 }
 
@@ -168,12 +174,11 @@ std::optional<std::vector<float>> read_reference(const std::string& dir, int cam
 }
 
 FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
-                             const FeatureOptions& options, const std::vector<float>* reference,
-                             const ImageExtent& camera) {
+                             const FeatureOptions& options, const std::vector<float>* reference) {
     FeatureOptions o = options;
     if (o.dark_block < 0) o.dark_block = std::min({60, g.display.P, g.display.Q});  // automatic
     const FeatureImages f = compute_features(T, g.camera_columns, g.camera_rows, g.display, o, reference);
-    write_feature_images(dir, f, camera);
+    write_feature_images(dir, f, g.camera);
     return f;
 }
 

@@ -20,6 +20,7 @@ namespace ltm::app {
 // The geometry features need, as recorded in DIR/run.json.
 struct RenderGeometry {
     int camera_columns = 0, camera_rows = 0;
+    ImageExtent camera;  // the camera's field of view (scene.camera.size), for the previews' axes
     DisplayGrid display;
 };
 
@@ -45,8 +46,7 @@ std::optional<std::vector<float>> read_reference(const std::string& dir, int cam
 // Computes the features and writes them (write_feature_images); returns the images. A negative
 // options.dark_block means automatic: 60 display pixels, or the display's smaller side if less.
 FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
-                             const FeatureOptions& options, const std::vector<float>* reference,
-                             const ImageExtent& camera = {});
+                             const FeatureOptions& options, const std::vector<float>* reference);
 
 // DIR/features.exr (one FLOAT channel per image), DIR/features.npz (the same channels as float32
 // arrays of shape (rows, columns), for numpy without an EXR reader) and DIR/features/<name>.png

@@ -9,7 +9,6 @@
 
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
-#include "io/Json.h"
 #include "io/Image.h"
 #include "io/LtmFile.h"
 
@@ -24,19 +23,6 @@ struct FeaturesArgs {
     FeatureOptions options{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
     int threads = 0;
 };
-
-// The camera's field of view, scene.camera.size in DIR/run.json (read_render_geometry has checked
-// the file), for the previews' axes in mm; unknown (previews without axes) if it is not there.
-ImageExtent camera_extent(const std::string& dir) {
-    try {
-        const io::Json root = io::read_json_file((fs::path(dir) / "run.json").string(), "run record");
-        const io::Json size = root.at("scene").at("camera").at("size");
-        if (size.is_array() && size.size() == 2 && size[0].is_number() && size[1].is_number())
-            return {size[0].get<double>(), size[1].get<double>()};
-    } catch (const std::exception&) {  // no extent: previews without axes
-    }
-    return {};
-}
 
 int run(const FeaturesArgs& a) {
     // Everything is read and checked before anything is written.
@@ -81,7 +67,7 @@ int run(const FeaturesArgs& a) {
         std::cerr << "ltmsim features: " << e.what() << "\n";
         return 2;
     }
-    write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr, camera_extent(a.dir));
+    write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr);
     if (!pattern.empty()) {
         const std::vector<double> y = apply_pattern(T, pattern);
         write_exr((fs::path(a.dir) / "pattern.exr").string(), g.camera_columns, g.camera_rows,
