@@ -37,6 +37,23 @@ using json = io::Json;
 
 namespace {
 
+// When this process started (static initialisation): a file temporary older than that in the
+// dataset's own folders was left by a killed process, not by a concurrent shard still writing.
+const fs::file_time_type kProcessStart = fs::file_time_type::clock::now();
+
+// Removes the file temporaries (io::AtomicFile's names) that killed processes left in `folder`
+// (index.jsonl, annotations.json, the card and its plots are written there atomically; a SIGKILL
+// in mid-write leaves the temporary). Those of a concurrent writer are newer and are kept.
+void remove_stale_file_temporaries(const fs::path& folder) {
+    std::error_code ec;
+    if (!fs::is_directory(folder, ec)) return;
+    for (const auto& e : fs::directory_iterator(folder, ec)) {
+        if (!io::AtomicFile::is_temporary_name(e.path().filename().string())) continue;
+        const auto written = fs::last_write_time(e.path(), ec);
+        if (!ec && written < kProcessStart) fs::remove(e.path(), ec);
+    }
+}
+
 constexpr const char* kChecksums = "SHA256SUMS";
 constexpr const char* kFormat = "ltmsim dataset 1";
 
@@ -337,6 +354,8 @@ IndexSummary build_dataset_index(const std::string& dir_text) {
     const fs::path dir(dir_text), id = dir / "dataset.json", samples = dir / "samples";
     if (!fs::is_regular_file(id))
         throw DatasetError(fmt::format("{}: no dataset.json: not an ltmsim dataset folder", dir_text));
+    remove_stale_file_temporaries(dir);
+    remove_stale_file_temporaries(dir / "card");
     json ident;
     try {
         ident = io::read_json_file(id.string(), "dataset description");
