@@ -1,7 +1,7 @@
 // `ltmsim experiment FOLDER -o OUT`: renders every scene an experiment file lists, computes their
 // features, and puts numbers on them (study/Experiment.h): the contrast-to-noise ratio of every
 // defect in every image, the false positives of the defect-free scene, the best new feature.
-// Writes OUT/<scene>/ (as `render`), OUT/contrast.csv, OUT/contrast.md and OUT/montage.png (rows:
+// Writes OUT/<scene>/ (as `render`, plus regions.json: the defect and surround pixels measured), OUT/contrast.csv, OUT/contrast.md and OUT/montage.png (rows:
 // images, columns: scenes), as the paper's Fig. 3.
 #include <filesystem>
 #include <fmt/format.h>
@@ -12,6 +12,7 @@
 #include "app/SceneSetup.h"
 #include "io/Image.h"
 #include "io/AtomicFile.h"
+#include "io/Json.h"
 #include "io/InputError.h"
 #include "study/Experiment.h"
 #include "geometry/TetMesh.h"
@@ -59,6 +60,11 @@ int run(const ExperimentArgs& a) {
         write_render_folder((fs::path(a.out) / s.stem).string(), s.scene, s.run, a.threads, report);
     }
     const ExperimentResult r = evaluate_experiment(spec, scenes);
+    // The regions each scene's numbers were measured in, for later measurements of the same scene
+    // (ltmsim acquire judges its CNR in exactly these pixels).
+    for (std::size_t i = 0; i < scenes.size(); ++i)
+        io::write_json_file((fs::path(a.out) / scenes[i].stem / "regions.json").string(), regions_json(r.regions[i]),
+                            "regions file", -1);
     io::write_file((fs::path(a.out) / "contrast.csv").string(), r.csv, "contrast table");
     io::write_file((fs::path(a.out) / "contrast.md").string(), r.markdown, "contrast table");
     write_png((fs::path(a.out) / "montage.png").string(), r.montage);

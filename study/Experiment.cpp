@@ -8,6 +8,7 @@
 #include <map>
 
 #include "features/Plot.h"
+#include "io/InputError.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
 #include "scene/StrictYaml.h"
@@ -158,6 +159,71 @@ Region surround_shell(const Tracer& free, const Scene& scene, const Defect& d) {
 
 }  // namespace
 
+std::vector<DefectRegions> experiment_regions(const ExperimentSpec& spec, const ExperimentScene& r) {
+    std::vector<DefectRegions> out;
+    const Scene& scene = r.scene;
+    if (scene.defects.empty()) return out;
+    const Scene free_scene = defect_free(scene);
+    const Solid free_solid = build_solid(free_scene, nullptr, /*surfaces_only=*/true);
+    TracerOptions fo;
+    fo.representation = Representation::Analytic;
+    const Tracer free(free_scene, free_solid, fo);
+    const Region met = pixels_meeting_defects(r.run.render);
+    for (size_t k = 0; k < scene.defects.size(); ++k) {
+        const Defect& d = scene.defects[k];
+        DefectRegions g;
+        g.defect = static_cast<int>(k);
+        g.radius_mm = d.max_semi_axis();
+        g.defect_pixels = traced_defect_region(scene, r.run.render, static_cast<int>(k), spec.defect_fraction);
+        auto& px = g.defect_pixels.pixels;
+        px.erase(std::remove_if(px.begin(), px.end(), [&](int p) { return !in_aperture(scene, free.camera().pixel_centre(p)); }),
+                 px.end());
+        g.surround = subtract(surround_shell(free, scene, d), met);
+        out.push_back(std::move(g));
+    }
+    return out;
+}
+
+io::Json regions_json(const std::vector<DefectRegions>& regions) {
+    io::Json defects = io::Json::array();
+    for (const DefectRegions& g : regions)
+        defects.push_back({{"defect", g.defect}, {"radius_mm", g.radius_mm}, {"defect_pixels", g.defect_pixels.pixels},
+                           {"surround_pixels", g.surround.pixels}});
+    return {{"defects", defects}};
+}
+
+std::vector<DefectRegions> read_regions_json(const std::string& path, long pixels) {
+    const io::Json j = io::read_json_file(path, "regions file");
+    auto fail = [&](const std::string& what) -> void {
+        throw InputError(path, 0, 0, "", what);
+    };
+    if (!j.is_object() || !j.contains("defects") || !j["defects"].is_array()) fail("expected an object with a list 'defects'");
+    std::vector<DefectRegions> out;
+    for (std::size_t i = 0; i < j["defects"].size(); ++i) {
+        const io::Json& d = j["defects"][i];
+        const std::string at = fmt::format("defects[{}]", i);
+        if (!d.is_object()) fail(at + ": expected an object");
+        DefectRegions g;
+        for (const char* key : {"defect", "radius_mm", "defect_pixels", "surround_pixels"})
+            if (!d.contains(key)) fail(fmt::format("{}: missing key '{}'", at, key));
+        if (!d["defect"].is_number_integer() || !d["radius_mm"].is_number()) fail(at + ": defect must be an integer, radius_mm a number");
+        g.defect = d["defect"].get<int>();
+        g.radius_mm = d["radius_mm"].get<double>();
+        for (const char* key : {"defect_pixels", "surround_pixels"}) {
+            const io::Json& a = d[key];
+            if (!a.is_array()) fail(fmt::format("{}.{}: expected a list of pixel indices", at, key));
+            Region& reg = std::string(key) == "defect_pixels" ? g.defect_pixels : g.surround;
+            for (std::size_t e = 0; e < a.size(); ++e) {
+                if (!a[e].is_number_integer() || a[e].get<long>() < 0 || a[e].get<long>() >= pixels)
+                    fail(fmt::format("{}.{}[{}]: expected a camera pixel index in [0, {})", at, key, e, pixels));
+                reg.pixels.push_back(a[e].get<int>());
+            }
+        }
+        out.push_back(std::move(g));
+    }
+    return out;
+}
+
 ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vector<ExperimentScene>& runs) {
     ExperimentResult out;
     std::vector<std::string> channels;
@@ -172,33 +238,22 @@ ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vect
     std::vector<std::string> md_columns;
     std::map<std::string, std::vector<double>> md_rows;
     for (const auto& r : runs) {
-        const Scene& scene = r.scene;
-        if (scene.defects.empty()) continue;
-        const Scene free_scene = defect_free(scene);
-        const Solid free_solid = build_solid(free_scene, nullptr, /*surfaces_only=*/true);
-        TracerOptions fo;
-        fo.representation = Representation::Analytic;
-        const Tracer free(free_scene, free_solid, fo);
-        const Region met = pixels_meeting_defects(r.run.render);
-        for (size_t k = 0; k < scene.defects.size(); ++k) {
-            const Defect& d = scene.defects[k];
-            Region defect = traced_defect_region(scene, r.run.render, static_cast<int>(k), spec.defect_fraction);
-            defect.pixels.erase(std::remove_if(defect.pixels.begin(), defect.pixels.end(),
-                                               [&](int p) { return !in_aperture(scene, free.camera().pixel_centre(p)); }),
-                                defect.pixels.end());
-            const Region surround = subtract(surround_shell(free, scene, d), met);
+        out.regions.push_back(experiment_regions(spec, r));
+        const std::vector<DefectRegions>& regions = out.regions.back();
+        for (const DefectRegions& g : regions) {
+            const int k = g.defect;
             md_columns.push_back(fmt::format("{} #{}", r.label, k));
             for (const auto& ch : channels) {
                 if (!r.run.features.has(ch)) continue;
                 ContrastResult c;
-                if (defect.pixels.size() >= 2 && surround.pixels.size() >= 2)
-                    c = contrast_to_noise(r.run.features.channel(ch), defect, surround);
+                if (g.defect_pixels.pixels.size() >= 2 && g.surround.pixels.size() >= 2)
+                    c = contrast_to_noise(r.run.features.channel(ch), g.defect_pixels, g.surround);
                 else
                     c.cnr = NAN;  // the defect is not seen at this resolution
-                csv += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", r.stem, k, d.max_semi_axis(), ch, c.defect_mean,
+                csv += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", r.stem, k, g.radius_mm, ch, c.defect_mean,
                                    c.surround_mean, c.surround_std, c.cnr, c.defect_pixels, c.surround_pixels);
                 md_rows[ch].push_back(c.cnr);
-                if (d.max_semi_axis() == smallest_radius) smallest_cnr[ch].push_back(c.cnr);
+                if (g.radius_mm == smallest_radius) smallest_cnr[ch].push_back(c.cnr);
             }
         }
     }

@@ -26,6 +26,7 @@
 #include "defects/SolidBuilder.h"
 #include "features/Contrast.h"
 #include "io/Image.h"
+#include "io/Json.h"
 #include "scene/Scene.h"
 #include "study/SceneRun.h"
 
@@ -59,12 +60,29 @@ std::vector<ExperimentScene> load_experiment_scenes(const ExperimentSpec& spec);
 // Renders one scene (as `ltmsim render` does, reference included).
 void render_experiment_scene(ExperimentScene& s, int threads);
 
+// The regions the contrast table measures for each defect of a rendered scene (see above; none for
+// a defect-free scene). `ltmsim experiment` writes them as OUT/<scene>/regions.json
+// (regions_json) so that later measurements of the same scene (`ltmsim acquire`) judge the very
+// same pixels: {"defects": [{"defect": k, "radius_mm": r, "defect_pixels": [k, ...],
+// "surround_pixels": [k, ...]}, ...]}, camera pixel indices k = m N + n.
+struct DefectRegions {
+    int defect = 0;
+    double radius_mm = 0;  // the defect's largest semi-axis
+    Region defect_pixels, surround;
+};
+std::vector<DefectRegions> experiment_regions(const ExperimentSpec& spec, const ExperimentScene& scene);
+io::Json regions_json(const std::vector<DefectRegions>& regions);
+// Reads regions_json's file; InputError naming the file and the bad entry (an index outside
+// [0, pixels) among them).
+std::vector<DefectRegions> read_regions_json(const std::string& path, long pixels);
+
 struct ExperimentResult {
     std::string csv, markdown, best;
     Image montage;
+    std::vector<std::vector<DefectRegions>> regions;  // per scene, in the spec's order
 };
 
-// The numbers and the montage, from the rendered scenes.
+// The numbers, the regions they were measured in, and the montage, from the rendered scenes.
 ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vector<ExperimentScene>& scenes);
 
 // The defect's traced image (see above) and the pixels some path of which met any defect.
