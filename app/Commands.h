@@ -16,6 +16,7 @@ void add_validate_command(CLI::App& app);
 void add_features_command(CLI::App& app);
 void add_experiment_command(CLI::App& app);
 void add_dataset_command(CLI::App& app);
+void add_acquire_command(CLI::App& app);
 
 int exit_status();
 void set_exit_status(int status);

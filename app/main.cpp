@@ -1,5 +1,5 @@
 // The ltmsim command. Subcommands arrive with the issues that ask for them
-// (docs/conventions.md, "Command line"): mesh, render, trace-rays, validate, features, experiment, dataset.
+// (docs/conventions.md, "Command line"): mesh, render, trace-rays, validate, features, experiment, dataset, acquire.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fmt/format.h>
@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     ltm::app::add_features_command(app);
     ltm::app::add_experiment_command(app);
     ltm::app::add_dataset_command(app);
+    ltm::app::add_acquire_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

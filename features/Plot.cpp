@@ -237,11 +237,17 @@ public:
         cairo_show_text(cr_, l.text.c_str());
         cairo_restore(cr_);
     }
-    void segment(double x0, double y0, double x1, double y1, const Rgb& colour) {
+    // dash: 0 solid, 1 dashed (5 on, 3 off), 2 dotted (1 on, 3 off).
+    void segment(double x0, double y0, double x1, double y1, const Rgb& colour, int dash = 0) {
         set_colour(colour);
+        if (dash) {
+            const double pattern[] = {dash == 1 ? 5.0 : 1.0, 3.0};
+            cairo_set_dash(cr_, pattern, 2, 0);
+        }
         cairo_move_to(cr_, x0, y0);
         cairo_line_to(cr_, x1, y1);
         cairo_stroke(cr_);
+        if (dash) cairo_set_dash(cr_, nullptr, 0, 0);
     }
     // A 1-pixel line just outside the w x h block at (x, y).
     void frame(int x, int y, int w, int h, const Rgb& colour) {
@@ -348,6 +354,40 @@ AxisTicks axis_ticks(double lo, double hi, double length, const Extent& extent, 
             kept.labels.push_back(t.labels[i]);
         }
     return kept;
+}
+
+// Ticks of a plot axis over [lo, hi] (log10 of the values when log): linear, nice_ticks (at most
+// 8); logarithmic, the powers of ten inside the range, else 1, 2 and 5 times powers of ten, else
+// nice_ticks of the values, each placed at log10 of its value (Plot.h, histogram).
+struct AxisValues {
+    std::vector<double> ticks, positions;
+    std::vector<std::string> labels;
+};
+
+AxisValues axis_values(double lo, double hi, bool log) {
+    AxisValues a;
+    if (log) {
+        auto inside = [&](double value) { return std::log10(value) >= lo - 1e-9 && std::log10(value) <= hi + 1e-9; };
+        for (const std::vector<double>& steps : {std::vector<double>{1}, std::vector<double>{1, 2, 5}}) {
+            a.ticks.clear();
+            for (int e = static_cast<int>(std::floor(lo)); e <= static_cast<int>(std::ceil(hi)); ++e)
+                for (const double s : steps) {
+                    const double t = e >= 0 ? s * std::pow(10.0, e) : s / std::pow(10.0, -e);
+                    if (inside(t)) a.ticks.push_back(t);
+                }
+            if (a.ticks.size() >= 2) break;
+        }
+        if (a.ticks.size() < 2) a.ticks = nice_ticks(std::pow(10.0, lo), std::pow(10.0, hi), 6);
+        for (const double t : a.ticks) {
+            a.positions.push_back(std::log10(t));
+            a.labels.push_back(with_minus_signs(format_tick(t, 3)));
+        }
+    } else {
+        a.ticks = nice_ticks(lo, hi, 8);
+        a.positions = a.ticks;
+        a.labels = tick_labels(a.ticks);
+    }
+    return a;
 }
 
 void shift(Label& l, double dx, double dy) {
@@ -780,29 +820,10 @@ HistogramLayout histogram_layout(const std::vector<double>& values, int bins, co
     L.y_max = L.y_ticks.back();
 
     // x: the ticks' values, and where they sit in the (log10) range.
-    std::vector<double> positions;
-    if (log_x) {
-        auto inside = [&](double value) { return std::log10(value) >= L.lo - 1e-9 && std::log10(value) <= L.hi + 1e-9; };
-        for (const std::vector<double>& steps : {std::vector<double>{1}, std::vector<double>{1, 2, 5}}) {
-            L.x_ticks.clear();
-            for (int e = static_cast<int>(std::floor(L.lo)); e <= static_cast<int>(std::ceil(L.hi)); ++e)
-                for (const double s : steps) {
-                    const double t = e >= 0 ? s * std::pow(10.0, e) : s / std::pow(10.0, -e);
-                    if (inside(t)) L.x_ticks.push_back(t);
-                }
-            if (L.x_ticks.size() >= 2) break;
-        }
-        if (L.x_ticks.size() < 2) L.x_ticks = nice_ticks(std::pow(10.0, L.lo), std::pow(10.0, L.hi), 6);
-        for (const double t : L.x_ticks) positions.push_back(std::log10(t));
-    } else {
-        L.x_ticks = nice_ticks(L.lo, L.hi, 8);
-        positions = L.x_ticks;
-    }
-    std::vector<std::string> x_text;
-    if (log_x)
-        for (const double t : L.x_ticks) x_text.push_back(with_minus_signs(format_tick(t, 3)));
-    else
-        x_text = tick_labels(L.x_ticks);
+    const AxisValues ax = axis_values(L.lo, L.hi, log_x);
+    L.x_ticks = ax.ticks;
+    const std::vector<double>& positions = ax.positions;
+    const std::vector<std::string>& x_text = ax.labels;
     const std::vector<std::string> y_text = tick_labels(L.y_ticks);
 
     double y_label_w = 0, x_label_w = 0;
@@ -870,6 +891,107 @@ Image histogram(const std::vector<double>& values, int bins, const std::string& 
         canvas.segment(left, y, left - kPlotTickLength, y, kFrameColour);
     }
     for (const Label& l : L.labels) canvas.draw(l);
+    return canvas.image();
+}
+
+
+// ---- line plot ----
+
+Rgb series_colour(int i, int n) { return viridis(n > 1 ? 0.85 * i / (n - 1) : 0.0); }
+
+Image line_plot(const std::vector<Series>& series, const std::string& title, const std::string& x_label,
+                const std::string& y_label, bool log_x, bool log_y) {
+    auto drawable = [&](double x, double y) {
+        return std::isfinite(x) && std::isfinite(y) && (!log_x || x > 0) && (!log_y || y > 0);
+    };
+    double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
+    for (const Series& s : series) {
+        if (s.x.size() != s.y.size()) throw std::invalid_argument("line_plot: series '" + s.name + "' has x and y of different lengths");
+        for (std::size_t i = 0; i < s.x.size(); ++i)
+            if (drawable(s.x[i], s.y[i])) {
+                const double x = log_x ? std::log10(s.x[i]) : s.x[i], y = log_y ? std::log10(s.y[i]) : s.y[i];
+                xlo = std::min(xlo, x);
+                xhi = std::max(xhi, x);
+                ylo = std::min(ylo, y);
+                yhi = std::max(yhi, y);
+            }
+    }
+    if (!(xhi >= xlo)) xlo = 0, xhi = 1;
+    if (!(yhi >= ylo)) ylo = 0, yhi = 1;
+    if (!(xhi > xlo)) xlo -= 0.5, xhi += 0.5;
+    if (!(yhi > ylo)) ylo -= 0.5, yhi += 0.5;
+    const AxisValues ax = axis_values(xlo, xhi, log_x), ay = axis_values(ylo, yhi, log_y);
+
+    Canvas canvas(kLinePlotWidth, kLinePlotHeight);
+    const int M = kPlotMargin, th = canvas.line(kTickFontSize).second, lh = canvas.line(kLabelFontSize).second;
+    const int out = 1 + kPlotTickLength + kPlotTickLabelGap;
+    double y_label_w = 0, legend_w = 0;
+    for (const auto& s : ay.labels) y_label_w = std::max(y_label_w, canvas.width_of(s, kTickFontSize));
+    for (const Series& s : series) legend_w = std::max(legend_w, canvas.width_of(s.name, kTickFontSize));
+    legend_w += kLegendSample + kLegendGap;
+    Label t = canvas.label(title, kTitleFontSize);
+    const double left = M + lh + kPlotAxisLabelGap + std::ceil(y_label_w) + out;
+    const double right = kLinePlotWidth - M - std::ceil(legend_w) - 2 * kLegendGap;
+    const double top = M + t.box.h + kPlotTitleGap + std::ceil(th / 2.0);
+    const double bottom = kLinePlotHeight - M - lh - kPlotAxisLabelGap - th - out;
+    auto col = [&](double v) { return left + (v - xlo) / (xhi - xlo) * (right - left); };
+    auto row = [&](double v) { return bottom - (v - ylo) / (yhi - ylo) * (bottom - top); };
+
+    t.box.x = (kLinePlotWidth - t.box.w) / 2;
+    t.box.y = M;
+    canvas.draw(t);
+    const double ax0 = std::floor(left) - 0.5, ay0 = std::ceil(bottom) + 0.5;
+    canvas.segment(ax0, ay0, right, ay0, kFrameColour);
+    canvas.segment(ax0, ay0, ax0, top, kFrameColour);
+    for (std::size_t i = 0; i < ax.ticks.size(); ++i) {
+        const double x = std::floor(col(ax.positions[i])) + 0.5;
+        canvas.segment(x, ay0, x, ay0 + kPlotTickLength, kFrameColour);
+        Label l = canvas.label(ax.labels[i], kTickFontSize);
+        l.box.x = x - l.box.w / 2;
+        l.box.y = bottom + out;
+        canvas.draw(l);
+    }
+    for (std::size_t i = 0; i < ay.ticks.size(); ++i) {
+        const double y = std::floor(row(ay.positions[i])) + 0.5;
+        canvas.segment(ax0, y, ax0 - kPlotTickLength, y, kFrameColour);
+        Label l = canvas.label(ay.labels[i], kTickFontSize);
+        l.box.x = left - out - l.box.w;
+        l.box.y = y - th / 2.0;
+        canvas.draw(l);
+    }
+    Label xl = canvas.label(x_label, kLabelFontSize);
+    xl.box.x = (left + right) / 2 - xl.box.w / 2;
+    xl.box.y = bottom + out + th + kPlotAxisLabelGap;
+    canvas.draw(xl);
+    Label yl = canvas.label(y_label, kLabelFontSize, true);
+    yl.box.x = M;
+    yl.box.y = (top + bottom) / 2 - yl.box.h / 2;
+    canvas.draw(yl);
+
+    for (std::size_t si = 0; si < series.size(); ++si) {
+        const Series& s = series[si];
+        const int style = s.dashed ? 1 : s.dotted ? 2 : 0;
+        bool pen = false;
+        double px = 0, py = 0;
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+            if (!drawable(s.x[i], s.y[i])) {
+                pen = false;
+                continue;
+            }
+            const double x = col(log_x ? std::log10(s.x[i]) : s.x[i]), y = row(log_y ? std::log10(s.y[i]) : s.y[i]);
+            if (pen) canvas.segment(px, py, x, y, s.colour, style);
+            canvas.fill({x - 1.5, y - 1.5, 3, 3}, s.colour);
+            pen = true;
+            px = x;
+            py = y;
+        }
+        const double ly = top + si * (th + 2) + th / 2.0;
+        canvas.segment(right + 2 * kLegendGap, ly, right + 2 * kLegendGap + kLegendSample, ly, s.colour, style);
+        Label l = canvas.label(s.name, kTickFontSize);
+        l.box.x = right + 2 * kLegendGap + kLegendSample + kLegendGap;
+        l.box.y = ly - th / 2.0;
+        canvas.draw(l);
+    }
     return canvas.image();
 }
 

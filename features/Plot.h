@@ -245,4 +245,33 @@ HistogramLayout histogram_layout(const std::vector<double>& values, int bins, co
 Image histogram(const std::vector<double>& values, int bins, const std::string& title, const std::string& x_label,
                 bool log_x, const std::string& y_label = "count");
 
+// ---- line plot ----
+
+constexpr int kLinePlotWidth = 760, kLinePlotHeight = 420;
+constexpr int kLegendSample = 24;  // the length of a legend's line sample
+constexpr int kLegendGap = 6;      // between the sample and its name, and between the plot and the legend
+
+// One curve: points (x[i], y[i]) joined in order; a point that cannot be drawn (non-finite, or
+// <= 0 on a log axis) breaks the line there. Drawn in `colour`, solid, dashed or dotted.
+struct Series {
+    std::string name;
+    std::vector<double> x, y;
+    Rgb colour = kBlack;
+    bool dashed = false;  // 5 on, 3 off
+    bool dotted = false;  // 1 on, 3 off (dashed wins if both)
+};
+
+// Curves over common axes, kLinePlotWidth x kLinePlotHeight pixels: the axes span the drawable
+// points of all series (widened by 1 around a single value, in log10 on a log axis), with ticks as
+// histogram places them (log_x / log_y: powers of ten, else 1, 2, 5 times them); every point
+// marked by a 3-pixel square; the legend (each series' line sample and name, in order) right of the
+// plot box, the title on top, the axis labels below and left. std::invalid_argument if a series'
+// x and y differ in length.
+Image line_plot(const std::vector<Series>& series, const std::string& title, const std::string& x_label,
+                const std::string& y_label, bool log_x, bool log_y);
+
+// Colours for curves: viridis at evenly spaced points from 0 to 0.85 (its yellow end is too
+// light on white), i of n.
+Rgb series_colour(int i, int n);
+
 }  // namespace ltm

@@ -1,0 +1,375 @@
+// `ltmsim acquire DIR --method M --patterns K [K ...]`: how well a real system, showing K display
+// patterns to a noisy camera instead of measuring T column by column, gets the features of the
+// render in DIR (ltm.npz and run.json; reference.exr for the deflection map; regions.json from
+// `ltmsim experiment` for the defects' contrast). acquire/ simulates and decodes; this command
+// reads, checks, measures against the exact features of T and writes (docs/acquisition.md):
+//   OUT/features-K<K>.exr   the estimated feature images, features.exr's channel names
+//   OUT/report.json         per K: errors against the exact features, CNR of every defect
+//   OUT/plot.png            relative error and CNR against K
+// OUT defaults to DIR/acquire-<method>; it appears complete or not at all (io/AtomicFolder.h).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <iostream>
+
+#include "acquire/Acquisition.h"
+#include "app/Commands.h"
+#include "app/FeatureOutputs.h"
+#include "app/SceneSetup.h"
+#include "app/SensorFile.h"
+#include "features/Contrast.h"
+#include "features/Plot.h"
+#include "io/AtomicFolder.h"
+#include "io/Image.h"
+#include "io/InputError.h"
+#include "io/Json.h"
+#include "io/LtmFile.h"
+#include "study/Experiment.h"
+
+namespace ltm::app {
+
+namespace fs = std::filesystem;
+using io::Json;
+using io::json_number;
+
+namespace {
+
+// CNR >= this counts as visible (the Rose criterion: A. Rose, "Vision: Human and Electronic",
+// 1973, a contrast of 5 standard deviations for certain detection); docs/acquisition.md's table.
+constexpr double kVisibleCnr = 5.0;
+
+struct AcquireArgs {
+    std::string dir, out, method = "gray", sensor, family = "bernoulli";
+    std::vector<int> patterns;
+    int stripe_width = 8;
+    double period = 16, sigmas = 5;
+    int threads = 0;
+    bool verbose = false, overwrite = false, noise_free = false;
+};
+
+// The channel whose CNR the plot shows for a method: the one it is built for.
+std::string primary_channel(acquire::Method m, const FeatureImages& f) {
+    switch (m) {
+        case acquire::Method::Gray: return f.has("Deflection") ? "Deflection" : "MeanX";
+        case acquire::Method::Stripes: return "ScatterRows";
+        case acquire::Method::Compressive:
+        case acquire::Method::BruteForce: return "ScatterCount";
+        case acquire::Method::Fields: return "DarkField";
+    }
+    return "BrightField";
+}
+
+// Errors of an estimated channel against the exact one, over the pixels where both are finite.
+Json channel_error(const std::vector<float>& est, const std::vector<float>& exact) {
+    double se = 0, ae = 0, ref = 0;
+    long n = 0, mismatch = 0;
+    std::vector<double> abs_err;
+    for (std::size_t k = 0; k < est.size(); ++k) {
+        const bool fe = std::isfinite(est[k]), fx = std::isfinite(exact[k]);
+        if (fe != fx) ++mismatch;
+        if (!fe || !fx) continue;
+        const double d = static_cast<double>(est[k]) - exact[k];
+        se += d * d;
+        ae += std::fabs(d);
+        abs_err.push_back(std::fabs(d));
+        ref += static_cast<double>(exact[k]) * exact[k];
+        ++n;
+    }
+    const double rmse = n ? std::sqrt(se / n) : NAN, rms = n ? std::sqrt(ref / n) : NAN;
+    // Quantiles of |error| (nearest rank): the RMS is dominated by a few rows whose energy is
+    // spread far (the paper's "white dots"), the median says what a typical pixel gets.
+    auto quantile = [&](double f) {
+        if (abs_err.empty()) return static_cast<double>(NAN);
+        const std::size_t i = std::min(abs_err.size() - 1, static_cast<std::size_t>(f * abs_err.size()));
+        std::nth_element(abs_err.begin(), abs_err.begin() + static_cast<std::ptrdiff_t>(i), abs_err.end());
+        return abs_err[i];
+    };
+    return {{"rmse", json_number(rmse)},
+            {"mean_abs_error", json_number(n ? ae / n : NAN)},
+            {"median_abs_error", json_number(quantile(0.5))},
+            {"p95_abs_error", json_number(quantile(0.95))},
+            {"exact_rms", json_number(rms)},
+            {"relative_rmse", json_number(rms > 0 ? rmse / rms : NAN)},
+            {"pixels", n},
+            {"finite_mismatch", mismatch}};
+}
+
+// The three CNRs of one defect in one channel (docs/acquisition.md, "Which noise"):
+//   exact     the exact-T feature's CNR: today's contrast table, whose noise is the simulator's
+//             Monte Carlo noise (the random Fresnel choices), which a real camera does not have;
+//   acquired  the estimated feature's CNR with its own surround noise (sensor and Monte Carlo);
+//   sensor    the estimated feature's contrast over the noise the acquisition added: the std over
+//             the surround of (estimate - exact). The instrument's claim rests on this one.
+struct Cnrs {
+    double exact = NAN, acquired = NAN, sensor = NAN;
+};
+
+Cnrs cnrs(const std::vector<float>& est, const std::vector<float>& exact, const DefectRegions& g) {
+    Cnrs c;
+    if (g.defect_pixels.pixels.size() < 2 || g.surround.pixels.size() < 2) return c;  // not seen at this resolution
+    // A region left with fewer than 2 finite pixels (a decoder's NaN rows: no light, or too
+    // spread to recover) has no CNR.
+    auto finite_enough = [](const std::vector<float>& img, const Region& r) {
+        int n = 0;
+        for (int k : r.pixels) n += std::isfinite(img[static_cast<std::size_t>(k)]) ? 1 : 0;
+        return n >= 2;
+    };
+    if (finite_enough(exact, g.defect_pixels) && finite_enough(exact, g.surround))
+        c.exact = contrast_to_noise(exact, g.defect_pixels, g.surround).cnr;
+    if (!finite_enough(est, g.defect_pixels) || !finite_enough(est, g.surround)) return c;
+    const ContrastResult a = contrast_to_noise(est, g.defect_pixels, g.surround);
+    c.acquired = a.cnr;
+    std::vector<float> diff(est.size());
+    for (std::size_t k = 0; k < est.size(); ++k) diff[k] = est[k] - exact[k];
+    const double noise = contrast_to_noise(diff, g.defect_pixels, g.surround).surround_std;
+    const double contrast = std::fabs(a.defect_mean - a.surround_mean);
+    c.sensor = noise > 0 ? contrast / noise : (contrast > 0 ? INFINITY : 0.0);
+    return c;
+}
+
+Json cnr_json(const Cnrs& c) {
+    return {{"exact", json_number(c.exact)}, {"acquired", json_number(c.acquired)}, {"sensor", json_number(c.sensor)}};
+}
+
+struct KResult {
+    int K = 0;
+    acquire::AcquireResult r;
+    Json report;
+};
+
+int fail(const std::string& message) {
+    std::cerr << "ltmsim acquire: " << message << "\n";
+    return 2;
+}
+
+int run(const AcquireArgs& a) {
+    // Everything is read and checked before anything is computed or written.
+    const fs::path npz = fs::path(a.dir) / "ltm.npz";
+    if (!fs::is_regular_file(npz))
+        return fail(fmt::format("{}: no ltm.npz there (render it with ltmsim render SCENE -o {})", a.dir, a.dir));
+    acquire::Method method;
+    if (!acquire::parse_method(a.method, method)) return fail(fmt::format("--method {}: unknown method", a.method));
+    if (!(a.period > 0) || !std::isfinite(a.period)) return fail(fmt::format("--period must be a finite number > 0 (got {})", a.period));
+    if (!(a.sigmas > 0) || !std::isfinite(a.sigmas)) return fail(fmt::format("--sigmas must be a finite number > 0 (got {})", a.sigmas));
+    acquire::SensorModel sensor;
+    CsrMatrix T;
+    RenderGeometry g;
+    std::optional<std::vector<float>> reference;
+    std::vector<DefectRegions> regions;
+    try {
+        if (!a.sensor.empty()) sensor = load_sensor_file(a.sensor);
+        sensor.noise_free = a.noise_free;
+        const std::string bad = acquire::check(sensor);
+        if (!bad.empty()) return fail(bad);
+        T = read_ltm_npz(npz.string());
+        g = read_render_geometry(a.dir);
+        if (T.rows != static_cast<std::int64_t>(g.camera_columns) * g.camera_rows ||
+            T.cols != static_cast<std::int64_t>(g.display.P) * g.display.Q)
+            return fail(fmt::format("{} is {} x {} but run.json describes a {} x {} camera and a {} x {} display", npz.string(),
+                                    T.rows, T.cols, g.camera_columns, g.camera_rows, g.display.Q, g.display.P));
+        reference = read_reference(a.dir, g.camera_columns * g.camera_rows);
+        const fs::path rj = fs::path(a.dir) / "regions.json";
+        if (fs::exists(rj)) regions = read_regions_json(rj.string(), static_cast<long>(g.camera_columns) * g.camera_rows);
+    } catch (const std::exception& e) {
+        return fail(e.what());
+    }
+    std::vector<int> Ks = a.patterns;
+    std::sort(Ks.begin(), Ks.end());
+    Ks.erase(std::unique(Ks.begin(), Ks.end()), Ks.end());
+    acquire::AcquireOptions o;
+    o.method = method;
+    o.stripe_width = a.stripe_width;
+    o.hadamard = a.family == "hadamard";
+    o.period = a.period;
+    o.sigmas = a.sigmas;
+    o.dark_block = std::min({60, g.display.P, g.display.Q});  // features.exr's DarkField block (write_features)
+    o.threads = a.threads;
+    for (int K : Ks) {
+        o.patterns = K;
+        const std::string bad = acquire::check_patterns(o, g.display.P, g.display.Q);
+        if (!bad.empty()) return fail(fmt::format("--patterns {}: {}", K, bad));
+    }
+    const std::string out = a.out.empty() ? (fs::path(a.dir) / fmt::format("acquire-{}", a.method)).string() : a.out;
+    if (!output_folder_ok("acquire", out)) return 2;
+    if (fs::exists(out) && !a.overwrite) return fail(fmt::format("{} exists; pass --overwrite to replace it", out));
+
+    // The exact features of T (features.exr's, recomputed: the same call write_features makes).
+    FeatureOptions fo;
+    fo.dark_block = o.dark_block;
+    const FeatureImages exact =
+        compute_features(T, g.camera_columns, g.camera_rows, g.display, fo, reference ? &*reference : nullptr);
+
+    std::vector<KResult> results;
+    for (int K : Ks) {
+        o.patterns = K;
+        KResult kr;
+        kr.K = K;
+        kr.r = acquire::acquire(T, g.camera_columns, g.camera_rows, g.display, o, sensor);
+        FeatureImages& f = kr.r.features;
+        if (reference && f.has("MeanX") && f.has("MeanY") && !f.has("Deflection")) add_deflection(f, *reference);
+        Json errors = Json::object();
+        for (const auto& [name, v] : f.channels)
+            if (exact.has(name)) errors[name] = channel_error(v, exact.channel(name));
+        Json defects = Json::array();
+        for (const DefectRegions& d : regions) {
+            Json ch = Json::object();
+            for (const auto& [name, v] : f.channels)
+                if (exact.has(name)) ch[name] = cnr_json(cnrs(v, exact.channel(name), d));
+            defects.push_back({{"defect", d.defect},
+                               {"radius_mm", d.radius_mm},
+                               {"channels", ch},
+                               {"bright_field", cnr_json(cnrs(kr.r.bright.channel("BrightField"),
+                                                              exact.channel("BrightField"), d))}});
+        }
+        kr.report = {{"patterns", K},
+                     {"shown", kr.r.summary},
+                     {"simulate_seconds", kr.r.simulate_seconds},
+                     {"decode_seconds", kr.r.decode_seconds},
+                     {"errors", errors},
+                     {"defects", defects}};
+        if (a.verbose)
+            std::cerr << fmt::format("acquire {} K = {}: {}; simulate {:.3f} s, decode {:.3f} s\n", a.method, K, kr.r.summary,
+                                     kr.r.simulate_seconds, kr.r.decode_seconds);
+        results.push_back(std::move(kr));
+    }
+
+    // The fewest patterns (of those run) at which each defect is visible, CNR >= 5 under the sensor.
+    Json fewest = Json::array();
+    for (std::size_t d = 0; d < regions.size(); ++d) {
+        Json ch = Json::object();
+        for (const auto& [name, v] : results.front().r.features.channels) {
+            if (!exact.has(name)) continue;
+            Json k = nullptr;
+            for (const KResult& kr : results) {
+                const Json& c = kr.report["defects"][d]["channels"][name]["sensor"];
+                if (c.is_number() && c.get<double>() >= kVisibleCnr) {
+                    k = kr.K;
+                    break;
+                }
+                if (c.is_string() && c.get<std::string>() == "inf") {
+                    k = kr.K;
+                    break;
+                }
+            }
+            ch[name] = k;
+        }
+        fewest.push_back({{"defect", regions[d].defect}, {"radius_mm", regions[d].radius_mm}, {"fewest_patterns", ch}});
+    }
+
+    const acquire::CameraModel& c = sensor.camera;
+    const acquire::DisplayModel& dm = sensor.display;
+    Json report = {
+        {"dir", a.dir},
+        {"method", a.method},
+        {"family", method == acquire::Method::Compressive ? Json(a.family) : Json(nullptr)},
+        {"camera_pixels", {g.camera_columns, g.camera_rows}},
+        {"display_pixels", {g.display.Q, g.display.P}},
+        {"sensor",
+         {{"noise_free", sensor.noise_free},
+          {"seed", sensor.seed},
+          {"camera", {{"full_well", c.full_well}, {"exposure", c.exposure}, {"read_noise", c.read_noise},
+                      {"dark_level", c.dark_level}, {"bits", c.bits}}},
+          {"display", {{"black_level", dm.black_level}, {"gamma", dm.gamma}, {"bits", dm.bits}}}}},
+        {"detection_sigmas", a.sigmas},
+        {"visible_cnr", kVisibleCnr},
+        {"cnr_note", "exact: exact-T feature, Monte Carlo noise; acquired: estimate, its own surround noise; sensor: "
+                     "estimate's contrast over the std of (estimate - exact) in the surround"},
+        {"runs", Json::array()},
+        {"visible", fewest}};
+    for (const KResult& kr : results) report["runs"].push_back(kr.report);
+
+    // The figure: relative error of every channel against K, and the primary channel's CNR.
+    std::vector<double> xs;
+    for (const KResult& kr : results) xs.push_back(kr.K);
+    std::vector<Series> err_series;
+    const auto& chans = results.front().r.features.channels;
+    int ci = 0;
+    for (const auto& [name, v] : chans) {
+        if (!exact.has(name)) continue;
+        Series s;
+        s.name = name;
+        s.x = xs;
+        for (const KResult& kr : results) {
+            const Json& e = kr.report["errors"][name]["relative_rmse"];
+            s.y.push_back(e.is_number() ? e.get<double>() : NAN);
+        }
+        s.colour = series_colour(ci++, static_cast<int>(chans.size()));
+        err_series.push_back(std::move(s));
+    }
+    const std::string primary = primary_channel(method, results.front().r.features);
+    std::vector<Series> cnr_series;
+    for (std::size_t d = 0; d < regions.size(); ++d) {
+        const Rgb colour = series_colour(static_cast<int>(d), static_cast<int>(regions.size()));
+        Series acq, bright, ex;
+        acq.name = fmt::format("defect {} (r = {:g} mm), {}", regions[d].defect, regions[d].radius_mm, primary);
+        bright.name = fmt::format("defect {}, bright field", regions[d].defect);
+        ex.name = fmt::format("defect {}, exact T (MC noise)", regions[d].defect);
+        bright.dashed = true;
+        ex.dotted = true;
+        for (const KResult& kr : results) {
+            const Json& dj = kr.report["defects"][d];
+            auto val = [](const Json& j) { return j.is_number() ? j.get<double>() : NAN; };
+            if (dj["channels"].contains(primary)) {
+                acq.y.push_back(val(dj["channels"][primary]["sensor"]));
+                ex.y.push_back(val(dj["channels"][primary]["exact"]));
+            } else {
+                acq.y.push_back(NAN);
+                ex.y.push_back(NAN);
+            }
+            bright.y.push_back(val(dj["bright_field"]["sensor"]));
+        }
+        for (Series* s : {&acq, &bright, &ex}) {
+            s->x = xs;
+            s->colour = colour;
+            cnr_series.push_back(*s);
+        }
+    }
+    const Image plot = montage(
+        {{line_plot(err_series, fmt::format("{}: error against the exact features of T", a.method), "patterns K",
+                    "relative RMS error", true, true)},
+         {line_plot(cnr_series, fmt::format("{}: defect CNR under the sensor model", a.method), "patterns K",
+                    "CNR", true, true)}},
+        {}, {}, "");
+
+    io::AtomicFolder folder(out, "acquisition folder");
+    for (const KResult& kr : results)
+        write_exr((fs::path(folder.path()) / fmt::format("features-K{}.exr", kr.K)).string(), kr.r.features.width,
+                  kr.r.features.height, kr.r.features.channels);
+    io::write_json_file((fs::path(folder.path()) / "report.json").string(), report, "acquisition report");
+    write_png((fs::path(folder.path()) / "plot.png").string(), plot);
+    folder.commit();
+    for (const KResult& kr : results) {
+        std::string line = fmt::format("K = {}:", kr.K);
+        for (const auto& [name, e] : kr.report["errors"].items())
+            if (e["relative_rmse"].is_number()) line += fmt::format(" {} {:.3g}", name, e["relative_rmse"].get<double>());
+        std::cout << line << "\n";
+    }
+    return 0;
+}
+
+}  // namespace
+
+void add_acquire_command(CLI::App& app) {
+    auto args = std::make_shared<AcquireArgs>();
+    CLI::App* cmd = app.add_subcommand("acquire", "Simulate a physical acquisition of DIR's features with K display patterns");
+    cmd->add_option("dir", args->dir, "A folder written by ltmsim render (ltm.npz, run.json)")->required();
+    cmd->add_option("--method", args->method, "gray | stripes | compressive | brute-force | fields (default gray)")
+        ->check(CLI::IsMember({"gray", "stripes", "compressive", "brute-force", "fields"}));
+    cmd->add_option("--patterns", args->patterns, "The number of patterns K; several values run a sweep")->required()->expected(1, 64);
+    cmd->add_option("--sensor", args->sensor, "A YAML file with a sensor section (default: the documented camera and LCD)");
+    cmd->add_option("--family", args->family, "compressive: bernoulli | hadamard (default bernoulli)")
+        ->check(CLI::IsMember({"bernoulli", "hadamard"}));
+    cmd->add_option("--stripe-width", args->stripe_width, "compressive: width of the screening stripes (default 8)");
+    cmd->add_option("--period", args->period, "gray: phase-shift period in display pixels (default 16)");
+    cmd->add_option("--sigmas", args->sigmas, "Detection threshold in noise standard deviations (default 5)");
+    cmd->add_option("-o,--output", args->out, "Output folder (default DIR/acquire-METHOD)");
+    cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    cmd->add_flag("--noise-free", args->noise_free, "No camera noise or quantisation: the decoders' own error");
+    cmd->add_flag("--verbose", args->verbose, "Print each K's simulation and decoding time");
+    cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output folder");
+    cmd->callback([args] { run_guarded("acquire", [&] { return run(*args); }); });
+}
+
+}  // namespace ltm::app
