@@ -244,8 +244,9 @@ std::vector<RowEntries> recover_compressive(const Measurements& stripes, const M
                     for (int j = 0; j < K; ++j)
                         A[static_cast<std::size_t>(i) * K + j] = (X.on(cand[static_cast<std::size_t>(i)], j) ? 1.0 : 0.0) -
                                                                  mean_on[static_cast<std::size_t>(cand[static_cast<std::size_t>(i)])];
+                // Plain OMP (largest |correlation|): the algorithm Tropp's guarantee is about
+                // (Recovery.h); T >= 0 is used afterwards, negative coefficients are dropped.
                 OmpOptions oo;
-                oo.nonnegative = true;
                 oo.max_atoms = std::max(1, K / 2);
                 double znorm = 0;
                 for (double v : z) znorm += v * v;
@@ -306,8 +307,8 @@ std::vector<RowEntries> brute_force(const CsrMatrix& T, const AcquireOptions& o,
 
 }  // namespace
 
-AcquireResult acquire(const CsrMatrix& T, int N, int M, const DisplayGrid& display, const AcquireOptions& o,
-                      const SensorModel& sensor) {
+AcquireResult run_acquisition(const CsrMatrix& T, int N, int M, const DisplayGrid& display, const AcquireOptions& o,
+                              const SensorModel& sensor) {
     const std::string bad_sensor = check(sensor);
     if (!bad_sensor.empty()) throw std::invalid_argument(bad_sensor);
     const std::string bad = check_patterns(o, display.P, display.Q);

@@ -66,7 +66,7 @@ struct AcquireResult {
 
 // Runs the acquisition and its decoder. Throws std::invalid_argument with check_patterns's
 // message (or check(sensor)'s) on bad options.
-AcquireResult acquire(const CsrMatrix& T, int camera_columns, int camera_rows, const DisplayGrid& display,
-                      const AcquireOptions& options, const SensorModel& sensor);
+AcquireResult run_acquisition(const CsrMatrix& T, int camera_columns, int camera_rows, const DisplayGrid& display,
+                              const AcquireOptions& options, const SensorModel& sensor);
 
 }  // namespace ltm::acquire

@@ -206,7 +206,7 @@ int run(const AcquireArgs& a) {
         o.patterns = K;
         KResult kr;
         kr.K = K;
-        kr.r = acquire::acquire(T, g.camera_columns, g.camera_rows, g.display, o, sensor);
+        kr.r = acquire::run_acquisition(T, g.camera_columns, g.camera_rows, g.display, o, sensor);
         FeatureImages& f = kr.r.features;
         if (reference && f.has("MeanX") && f.has("MeanY") && !f.has("Deflection")) add_deflection(f, *reference);
         Json errors = Json::object();

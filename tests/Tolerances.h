@@ -683,3 +683,44 @@ inline double quadratic_root(double t, double M, double sqrt_disc) {
 inline double float_count(int n) { return std::ldexp(static_cast<double>(n), -24); }
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// ---- acquire_*: simulated acquisition (acquire/) ----
+
+// acquire_sensor's Z-tests of the noise model's mean and variance use bonferroni_z(n) with n the
+// number of statistics tested in the file (family-wise false alarm kFamilyAlpha, seeded, so the
+// outcome is fixed). The variance statistic's standard error is sqrt((mu4 - sigma^4 (n - 3) /
+// (n - 1)) / n) for n samples (the variance of the sample variance, any distribution; Cramer,
+// Mathematical Methods of Statistics, 1946, Sec. 27.4), mu4 the closed-form central fourth moment.
+
+// A decoded display position in mm, d = -W/2 + (c + 1/2) W / Q for an exact integer or a double
+// column c: three rounded operations on magnitudes <= W (3 u W) and the float rounding of the
+// result (2^-24 |d|): 2^-23 (W + |d|) covers both with a factor 2 (u = 2^-53).
+inline double decoded_position(double extent_mm, double value_abs) { return std::ldexp(extent_mm + value_abs, -23); }
+
+// Phase shifting with the display quantised to `bits` and gamma g >= 1: each pattern's radiance
+// is off the ideal sinusoid by at most the half step 2^-bits / 2 of the command, times the
+// largest slope g of v^g on [0, 1], i.e. |dL| <= g 2^-(bits+1), so |dy_j| <= (1 - b) t g 2^-(bits+1)
+// for a row holding t. The phase sum's modulus is (1 - b) t s / 4 for s steps (Patterns.h), so
+// the phase moves by at most sum_j |dy_j| / modulus <= 4 g 2^-(bits+1) = g 2^-(bits-1) rad (the
+// float storage of the commands, 2^-24, and the double sums, ~s u, far below), and the column by
+// period / (2 pi) times that; in mm, times W / Q. Plus decoded_position's rounding.
+inline double phase_position(double period, double gamma, int bits, double pixel_mm, double extent_mm, double value_abs) {
+    return period / (2 * M_PI) * gamma * std::ldexp(1.0, -(bits - 1)) * pixel_mm + decoded_position(extent_mm, value_abs);
+}
+
+// OMP's coefficients on the recovered support: the final least-squares fit by Householder QR is
+// backward stable, so the coefficients are within c K u kappa(A_S) |t| of the exact ones (Higham,
+// Accuracy and Stability, 2nd ed., Thm. 20.3, first order, c a small constant), z itself carrying
+// s K u |t| from its double evaluation. With mutual coherence mu < 1 / (2 s - 1) the Gram matrix
+// of the normalised support columns has eigenvalues in [1 - (s - 1) mu, 1 + (s - 1) mu]
+// (Gershgorin), so kappa <= sqrt(3) for s >= 2; 64 K u |t|_max covers c = 16 and the rest.
+inline double omp_coefficient(int K, double max_abs) { return 64.0 * K * (kEps / 2) * max_abs; }
+
+// A noise-free radiance y = b s + (1 - b) sum_lit T (acquire/Acquisition.cpp) against the exact
+// sum: the row's n float entries summed in double (n u S), two products and a sum (3 u S), S the
+// row's absolute sum; 2^-40 S bounds it for n < 2^10 with margin.
+inline double radiance_sum(double abs_sum) { return std::ldexp(abs_sum, -40); }
+
+}  // namespace ltm::tol
