@@ -26,8 +26,8 @@ void in_arena(int threads, const F& body) {
     arena.execute(body);
 }
 
-// The seed of the random patterns (not of the noise: a system shows the same patterns every time).
-std::uint64_t pattern_seed(const SensorModel& s) { return stream_key(s.seed, 0x7061747465726e73ULL, 1); }
+// The random patterns' own seed (not the noise's: a system shows the same patterns every time).
+std::uint64_t pattern_seed(const AcquireOptions& o) { return stream_key(o.pattern_seed, 0x7061747465726e73ULL, 1); }
 
 // A compressive row whose screening leaves more candidates than this is not recovered (its
 // features are NaN): the dictionary would be K x n with n beyond what a per-row OMP can afford
@@ -284,11 +284,17 @@ std::vector<RowEntries> brute_force(const CsrMatrix& T, const AcquireOptions& o,
                 for (std::int64_t i = T.indptr[k]; i < T.indptr[k + 1]; ++i) s += T.data[i];
                 std::int64_t i = T.indptr[k];
                 double sum = 0;
+                // Every display pixel the row does not see gives the same radiance b s: its signal
+                // law is tabulated once per row (the same draws measure() makes).
+                const double y_dark = b * s;
+                const PoissonLaw dark(sensor.camera.full_well * sensor.camera.exposure * y_dark + sensor.camera.dark_level);
                 for (long l = 0; l < n; ++l) {
                     double t = 0;
                     if (i < T.indptr[k + 1] && T.indices[i] == l) t = T.data[i++];
                     CounterRng rng(sensor.seed, static_cast<std::uint64_t>(l), static_cast<std::uint64_t>(k));
-                    yhat[static_cast<std::size_t>(l)] = measure(sensor, b * s + (1 - b) * t, rng);
+                    const double y = b * s + (1 - b) * t;
+                    yhat[static_cast<std::size_t>(l)] =
+                        sensor.noise_free ? y : (t == 0 ? measure(sensor, dark, rng) : measure(sensor, y, rng));
                     sum += yhat[static_cast<std::size_t>(l)];
                 }
                 const double s_hat = sum / (n * b + 1 - b);
@@ -320,20 +326,24 @@ AcquireResult run_acquisition(const CsrMatrix& T, int N, int M, const DisplayGri
     FeatureOptions fo;
     fo.dark_block = std::min(o.dark_block, std::min(P, Q));
     Clock::time_point t0 = Clock::now();
-    double decode = 0;
-    auto decode_timed = [&](auto&& f) {
+    double decode = 0, patterns = 0;
+    auto timed = [](double& sum, auto&& f) {
         const Clock::time_point d0 = Clock::now();
         auto r = f();
-        decode += seconds_since(d0);
+        sum += seconds_since(d0);
         return r;
     };
+    auto decode_timed = [&](auto&& f) { return timed(decode, f); };
+    auto make = [&](auto&& f) { return timed(patterns, f); };
     switch (o.method) {
         case Method::Gray: {
             const int base = 2 * (ceil_log2(P) + ceil_log2(Q));
             const int steps = (o.patterns - base) / 2;
-            const Measurements g = simulate(T, gray_code_block(P, Q), sensor, 0, o.threads);
+            const Measurements g = simulate(T, make([&] { return gray_code_block(P, Q); }), sensor, 0, o.threads);
             Measurements ph;
-            if (steps > 0) ph = simulate(T, phase_block(P, Q, steps, o.period, sensor.display), sensor, base, o.threads);
+            if (steps > 0)
+                ph = simulate(T, make([&] { return phase_block(P, Q, steps, o.period, sensor.display); }), sensor, base,
+                              o.threads);
             out.features = decode_timed([&] {
                 return decode_mean_position(g, steps > 0 ? &ph : nullptr, N, M, display, steps, o.period, sensor, o.sigmas);
             });
@@ -345,7 +355,7 @@ AcquireResult run_acquisition(const CsrMatrix& T, int N, int M, const DisplayGri
         }
         case Method::Stripes: {
             const int w = stripe_width_for(o.patterns, P, Q);
-            const Measurements y = simulate(T, stripe_block(P, Q, w), sensor, 0, o.threads);
+            const Measurements y = simulate(T, make([&] { return stripe_block(P, Q, w); }), sensor, 0, o.threads);
             out.features = decode_timed([&] { return decode_stripes(y, N, M, display, w, sensor, o.sigmas); });
             out.summary = fmt::format("{} column and {} row stripes, {} display pixel{} wide", (Q + w - 1) / w,
                                       (P + w - 1) / w, w, w == 1 ? "" : "s");
@@ -355,9 +365,10 @@ AcquireResult run_acquisition(const CsrMatrix& T, int N, int M, const DisplayGri
             const int w = o.stripe_width;
             const int screen = stripes_count(w, P, Q);
             const int Kc = o.patterns - screen;
-            const Measurements s = simulate(T, stripe_block(P, Q, w), sensor, 0, o.threads);
-            const PatternBlock X = o.hadamard ? hadamard_block(P, Q, Kc, pattern_seed(sensor))
-                                              : bernoulli_block(P, Q, Kc, pattern_seed(sensor));
+            const Measurements s = simulate(T, make([&] { return stripe_block(P, Q, w); }), sensor, 0, o.threads);
+            const PatternBlock X = make([&] {
+                return o.hadamard ? hadamard_block(P, Q, Kc, pattern_seed(o)) : bernoulli_block(P, Q, Kc, pattern_seed(o));
+            });
             const Measurements y = simulate(T, X, sensor, screen, o.threads);
             out.features = decode_timed([&] {
                 const std::vector<RowEntries> rows = recover_compressive(s, y, X, P, Q, o, sensor);
@@ -378,14 +389,15 @@ AcquireResult run_acquisition(const CsrMatrix& T, int N, int M, const DisplayGri
             break;
         }
         case Method::Fields: {
-            const Measurements y = simulate(T, field_block(P, Q, fo.dark_block), sensor, 0, o.threads);
+            const Measurements y = simulate(T, make([&] { return field_block(P, Q, fo.dark_block); }), sensor, 0, o.threads);
             out.features = decode_timed([&] { return decode_fields(y, N, M); });
             out.summary = fmt::format("bright field and dark field (centred dark block of {} display pixels)", fo.dark_block);
             break;
         }
     }
     out.decode_seconds = decode;
-    out.simulate_seconds = seconds_since(t0) - decode;
+    out.pattern_seconds = patterns;
+    out.simulate_seconds = seconds_since(t0) - decode - patterns;
     // The bright field beside every method: one more image through the same sensor, with its own
     // streams (pattern index K).
     PatternBlock white = PatternBlock::make_binary(P, Q, 1);

@@ -40,6 +40,7 @@ struct AcquireOptions {
     double period = 16;            // gray: phase-shift period (display pixels)
     double sigmas = 5;             // detection threshold, in standard deviations of the noise
     int dark_block = 60;           // fields: features/Features.h's DarkField block
+    std::uint64_t pattern_seed = 1;  // compressive: the random patterns (the noise has the sensor's seed)
     int threads = 0;
 };
 
@@ -61,7 +62,9 @@ struct AcquireResult {
     FeatureImages features;  // the method's estimates, features.exr's channel names
     FeatureImages bright;    // a bright field through the same sensor (one more image, not counted in K)
     std::string summary;     // what was shown: "36 Gray code + 8 phase-shift patterns (period 16 px)"
-    double simulate_seconds = 0, decode_seconds = 0;
+    // Wall-clock times: drawing the pattern blocks, the product Y = T X with the sensor's noise,
+    // and the decoder (for brute-force, simulating is streamed inside the decoder's pass).
+    double pattern_seconds = 0, simulate_seconds = 0, decode_seconds = 0;
 };
 
 // Runs the acquisition and its decoder. Throws std::invalid_argument with check_patterns's

@@ -6,6 +6,12 @@
 
 namespace ltm::acquire {
 
+namespace {
+constexpr double kInversionBelow = 12;  // poisson: sequential search below, PTRS from here on
+constexpr int kInversionMaxK = 1000;     // the search's cap (reached only as F stalls below u ~ 1 - 2^-53)
+}  // namespace
+
+
 std::string check(const SensorModel& m) {
     const CameraModel& c = m.camera;
     const DisplayModel& d = m.display;
@@ -32,12 +38,12 @@ double linear_command(const DisplayModel& d, double t) { return std::pow(std::cl
 
 double poisson(double lambda, CounterRng& rng) {
     if (!(lambda > 0)) return 0;
-    if (lambda < 12) {
+    if (lambda < kInversionBelow) {
         // Sequential search: the smallest k with F(k) >= u.
         const double u = rng.uniform();
         double p = std::exp(-lambda), F = p;
         int k = 0;
-        while (u > F && k < 1000) {
+        while (u > F && k < kInversionMaxK) {
             ++k;
             p *= lambda / k;
             F += p;
@@ -58,6 +64,26 @@ double poisson(double lambda, CounterRng& rng) {
     }
 }
 
+PoissonLaw::PoissonLaw(double lambda) : lambda_(lambda) {
+    if (!(lambda > 0) || lambda >= kInversionBelow) return;
+    cdf_.resize(kInversionMaxK + 1);
+    double p = std::exp(-lambda), F = p;
+    cdf_[0] = F;
+    for (int k = 1; k <= kInversionMaxK; ++k) {
+        p *= lambda / k;
+        F += p;
+        cdf_[static_cast<std::size_t>(k)] = F;
+    }
+}
+
+double PoissonLaw::sample(CounterRng& rng) const {
+    if (cdf_.empty()) return poisson(lambda_, rng);
+    const double u = rng.uniform();
+    int k = 0;
+    while (u > cdf_[static_cast<std::size_t>(k)] && k < kInversionMaxK) ++k;
+    return k;
+}
+
 double gaussian(CounterRng& rng) {
     const double u1 = rng.uniform(), u2 = rng.uniform();
     return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
@@ -74,11 +100,21 @@ double digital_number(const CameraModel& c, double e) {
     return std::clamp(std::round(e / adc_gain(c)), 0.0, std::ldexp(1.0, c.bits) - 1);
 }
 
+namespace {
+double calibrated(const CameraModel& c, double e) {
+    return (adc_gain(c) * digital_number(c, e) - c.dark_level) / (c.full_well * c.exposure);
+}
+}  // namespace
+
 double measure(const SensorModel& m, double y, CounterRng& rng) {
     if (m.noise_free) return y;
+    return calibrated(m.camera, electrons(m.camera, y, rng));
+}
+
+double measure(const SensorModel& m, const PoissonLaw& signal, CounterRng& rng) {
     const CameraModel& c = m.camera;
-    const double dn = digital_number(c, electrons(c, y, rng));
-    return (adc_gain(c) * dn - c.dark_level) / (c.full_well * c.exposure);
+    const double S = signal.sample(rng);
+    return calibrated(c, S + (c.read_noise > 0 ? c.read_noise * gaussian(rng) : 0.0));
 }
 
 double measurement_variance(const SensorModel& m, double y) {

@@ -28,6 +28,7 @@
 // camera pixel): the same seed gives bit-identical images whatever the thread count.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "acquire/CounterRng.h"
 
@@ -74,6 +75,21 @@ double linear_command(const DisplayModel& d, double t);
 // Poisson random variables", Insurance: Mathematics and Economics 12 (1993) 39-45, valid for
 // lambda >= 10; the constants of his Table 1, as numpy's random_poisson_ptrs uses them).
 double poisson(double lambda, CounterRng& rng);
+// One Poisson law drawn from many times (a brute-force acquisition's dark measurements all share
+// theirs): for lambda < 12 the cumulative table F(0..1000) summed exactly as poisson's sequential
+// search sums it, so a draw is the same number poisson(lambda, rng) gives for the same stream;
+// otherwise poisson itself.
+class PoissonLaw {
+public:
+    explicit PoissonLaw(double lambda);
+    double sample(CounterRng& rng) const;
+    double mean() const { return lambda_; }
+
+private:
+    double lambda_;
+    std::vector<double> cdf_;  // empty for lambda >= 12 or lambda <= 0
+};
+
 // A standard normal variate (Box-Muller, two uniforms, the cosine branch).
 double gaussian(CounterRng& rng);
 
@@ -86,6 +102,9 @@ double adc_gain(const CameraModel& c);
 
 // One calibrated measurement y_hat of radiance y (above); y itself when noise_free.
 double measure(const SensorModel& m, double y, CounterRng& rng);
+// The same, for a radiance whose signal law (fe y + dark_level, PoissonLaw) is already tabulated:
+// the same value measure gives for that y and stream. Not for noise_free models.
+double measure(const SensorModel& m, const PoissonLaw& signal, CounterRng& rng);
 
 // var(y_hat) for true radiance y (above, below saturation); 0 when noise_free.
 double measurement_variance(const SensorModel& m, double y);

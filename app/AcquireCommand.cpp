@@ -100,32 +100,36 @@ Json channel_error(const std::vector<float>& est, const std::vector<float>& exac
 //   exact     the exact-T feature's CNR: today's contrast table, whose noise is the simulator's
 //             Monte Carlo noise (the random Fresnel choices), which a real camera does not have;
 //   acquired  the estimated feature's CNR with its own surround noise (sensor and Monte Carlo);
-//   sensor    the estimated feature's contrast over the noise the acquisition added: the std over
-//             the surround of (estimate - exact). The instrument's claim rests on this one.
+//   sensor    the estimated feature's contrast over the sensor's noise alone: the std over the
+//             surround of (estimate - repeat) / sqrt 2, the repeat being the same acquisition with
+//             an independent noise seed (same T, same patterns: the Monte Carlo part cancels
+//             exactly). The instrument's claim rests on this one.
 struct Cnrs {
     double exact = NAN, acquired = NAN, sensor = NAN;
 };
 
-Cnrs cnrs(const std::vector<float>& est, const std::vector<float>& exact, const DefectRegions& g) {
+// A region left with fewer than 2 finite pixels (a decoder's NaN rows: no light, or too spread to
+// recover) has no CNR.
+bool finite_enough(const std::vector<float>& img, const Region& r) {
+    int n = 0;
+    for (int k : r.pixels) n += std::isfinite(img[static_cast<std::size_t>(k)]) ? 1 : 0;
+    return n >= 2;
+}
+
+Cnrs cnrs(const std::vector<float>& est, const std::vector<float>& repeat, const std::vector<float>& exact,
+          const DefectRegions& g) {
     Cnrs c;
     if (g.defect_pixels.pixels.size() < 2 || g.surround.pixels.size() < 2) return c;  // not seen at this resolution
-    // A region left with fewer than 2 finite pixels (a decoder's NaN rows: no light, or too
-    // spread to recover) has no CNR.
-    auto finite_enough = [](const std::vector<float>& img, const Region& r) {
-        int n = 0;
-        for (int k : r.pixels) n += std::isfinite(img[static_cast<std::size_t>(k)]) ? 1 : 0;
-        return n >= 2;
-    };
     if (finite_enough(exact, g.defect_pixels) && finite_enough(exact, g.surround))
         c.exact = contrast_to_noise(exact, g.defect_pixels, g.surround).cnr;
     if (!finite_enough(est, g.defect_pixels) || !finite_enough(est, g.surround)) return c;
     const ContrastResult a = contrast_to_noise(est, g.defect_pixels, g.surround);
     c.acquired = a.cnr;
     std::vector<float> diff(est.size());
-    for (std::size_t k = 0; k < est.size(); ++k) diff[k] = est[k] - exact[k];
-    const double noise = contrast_to_noise(diff, g.defect_pixels, g.surround).surround_std;
+    for (std::size_t k = 0; k < est.size(); ++k) diff[k] = static_cast<float>((est[k] - repeat[k]) / std::sqrt(2.0));
+    const double noise = finite_enough(diff, g.surround) ? contrast_to_noise(diff, g.defect_pixels, g.surround).surround_std : NAN;
     const double contrast = std::fabs(a.defect_mean - a.surround_mean);
-    c.sensor = noise > 0 ? contrast / noise : (contrast > 0 ? INFINITY : 0.0);
+    c.sensor = noise > 0 ? contrast / noise : (noise == 0 ? (contrast > 0 ? INFINITY : 0.0) : NAN);
     return c;
 }
 
@@ -135,7 +139,7 @@ Json cnr_json(const Cnrs& c) {
 
 struct KResult {
     int K = 0;
-    acquire::AcquireResult r;
+    acquire::AcquireResult r, repeat;  // repeat: an independent noise seed (for the sensor's CNR)
     Json report;
 };
 
@@ -207,8 +211,14 @@ int run(const AcquireArgs& a) {
         KResult kr;
         kr.K = K;
         kr.r = acquire::run_acquisition(T, g.camera_columns, g.camera_rows, g.display, o, sensor);
-        FeatureImages& f = kr.r.features;
-        if (reference && f.has("MeanX") && f.has("MeanY") && !f.has("Deflection")) add_deflection(f, *reference);
+        if (!regions.empty()) {
+            acquire::SensorModel other = sensor;
+            other.seed = acquire::mix64(sensor.seed ^ 0x7265706561740000ULL);  // "repeat"
+            kr.repeat = acquire::run_acquisition(T, g.camera_columns, g.camera_rows, g.display, o, other);
+        }
+        for (FeatureImages* f : {&kr.r.features, &kr.repeat.features})
+            if (reference && f->has("MeanX") && f->has("MeanY") && !f->has("Deflection")) add_deflection(*f, *reference);
+        const FeatureImages& f = kr.r.features;
         Json errors = Json::object();
         for (const auto& [name, v] : f.channels)
             if (exact.has(name)) errors[name] = channel_error(v, exact.channel(name));
@@ -216,22 +226,25 @@ int run(const AcquireArgs& a) {
         for (const DefectRegions& d : regions) {
             Json ch = Json::object();
             for (const auto& [name, v] : f.channels)
-                if (exact.has(name)) ch[name] = cnr_json(cnrs(v, exact.channel(name), d));
+                if (exact.has(name)) ch[name] = cnr_json(cnrs(v, kr.repeat.features.channel(name), exact.channel(name), d));
             defects.push_back({{"defect", d.defect},
                                {"radius_mm", d.radius_mm},
                                {"channels", ch},
                                {"bright_field", cnr_json(cnrs(kr.r.bright.channel("BrightField"),
+                                                              kr.repeat.bright.channel("BrightField"),
                                                               exact.channel("BrightField"), d))}});
         }
         kr.report = {{"patterns", K},
                      {"shown", kr.r.summary},
+                     {"pattern_seconds", kr.r.pattern_seconds},
                      {"simulate_seconds", kr.r.simulate_seconds},
                      {"decode_seconds", kr.r.decode_seconds},
                      {"errors", errors},
                      {"defects", defects}};
         if (a.verbose)
-            std::cerr << fmt::format("acquire {} K = {}: {}; simulate {:.3f} s, decode {:.3f} s\n", a.method, K, kr.r.summary,
-                                     kr.r.simulate_seconds, kr.r.decode_seconds);
+            std::cerr << fmt::format("acquire {} K = {}: {}; patterns {:.3f} s, simulate {:.3f} s, decode {:.3f} s\n",
+                                     a.method, K, kr.r.summary, kr.r.pattern_seconds, kr.r.simulate_seconds,
+                                     kr.r.decode_seconds);
         results.push_back(std::move(kr));
     }
 
@@ -275,7 +288,8 @@ int run(const AcquireArgs& a) {
         {"detection_sigmas", a.sigmas},
         {"visible_cnr", kVisibleCnr},
         {"cnr_note", "exact: exact-T feature, Monte Carlo noise; acquired: estimate, its own surround noise; sensor: "
-                     "estimate's contrast over the std of (estimate - exact) in the surround"},
+                     "estimate's contrast over the sensor noise alone, the std of (estimate - repeat) / sqrt 2 in the "
+                     "surround, repeat = the same acquisition with an independent noise seed"},
         {"runs", Json::array()},
         {"visible", fewest}};
     for (const KResult& kr : results) report["runs"].push_back(kr.report);

@@ -161,3 +161,19 @@ TEST(Sensor, CheckNamesTheBadKey) {
 }
 
 }  // namespace
+
+namespace {
+
+// The tabulated law gives exactly poisson()'s draws for the same streams (the brute-force
+// acquisition relies on it to be the same measurement), on both sides of the switch to PTRS.
+TEST(Sensor, TabulatedPoissonLawDrawsWhatPoissonDraws) {
+    for (double L : {0.0, 0.7, 5.25, 11.99, 12.0, 40.0}) {
+        const ltm::acquire::PoissonLaw law(L);
+        for (std::uint64_t i = 0; i < 20000; ++i) {
+            ltm::acquire::CounterRng a(9, 1, i), b(9, 1, i);
+            ASSERT_EQ(law.sample(a), ltm::acquire::poisson(L, b)) << L << " " << i;
+        }
+    }
+}
+
+}  // namespace
