@@ -10,23 +10,28 @@
 
 namespace ltm::acquire {
 
-PatternBlock PatternBlock::make_binary(int P, int Q, int K) {
+namespace {
+
+PatternBlock empty_block(int P, int Q, int K, bool binary) {
     PatternBlock b;
     b.P = P;
     b.Q = Q;
     b.K = K;
-    b.binary = true;
-    b.words = (K + 63) / 64;
+    b.binary = binary;
+    b.words = binary ? (K + 63) / 64 : 0;
+    return b;
+}
+
+}  // namespace
+
+PatternBlock PatternBlock::make_binary(int P, int Q, int K) {
+    PatternBlock b = empty_block(P, Q, K, true);
     b.bits.assign(static_cast<std::size_t>(b.pixels()) * b.words, 0);
     return b;
 }
 
 PatternBlock PatternBlock::make_grey(int P, int Q, int K) {
-    PatternBlock b;
-    b.P = P;
-    b.Q = Q;
-    b.K = K;
-    b.binary = false;
+    PatternBlock b = empty_block(P, Q, K, false);
     b.values.assign(static_cast<std::size_t>(b.pixels()) * K, 0.0f);
     return b;
 }

@@ -127,7 +127,8 @@ Cnrs cnrs(const std::vector<float>& est, const std::vector<float>& repeat, const
     c.acquired = a.cnr;
     std::vector<float> diff(est.size());
     for (std::size_t k = 0; k < est.size(); ++k) diff[k] = static_cast<float>((est[k] - repeat[k]) / std::sqrt(2.0));
-    const double noise = finite_enough(diff, g.surround) ? contrast_to_noise(diff, g.defect_pixels, g.surround).surround_std : NAN;
+    // Only the surround's spread is wanted (the defect region may hold NaN rows of the repeat).
+    const double noise = finite_enough(diff, g.surround) ? contrast_to_noise(diff, g.surround, g.surround).surround_std : NAN;
     const double contrast = std::fabs(a.defect_mean - a.surround_mean);
     c.sensor = noise > 0 ? contrast / noise : (noise == 0 ? (contrast > 0 ? INFINITY : 0.0) : NAN);
     return c;

@@ -171,6 +171,32 @@ protected:
     std::filesystem::path dir;
 };
 
+// A fixture for the commands that read a render folder (features, acquire): SetUp renders a small
+// lens with one bubble (16 x 12 camera over 25 x 20 mm, 50 x 40 display over 100 x 80 mm, 16
+// samples per pixel) into dir/r, failing the test if the render does.
+class RenderedFolderTest : public TempDirTest {
+protected:
+    // Runs `ltmsim <args>` and returns its exit status; stderr into *err if given, stdout dropped.
+    int run(const std::string& args, std::string* err = nullptr) {
+        const Outcome o = ltmsim(args, dir, Capture::StderrOnly);
+        if (err) *err = o.err;
+        return o.status;
+    }
+    void SetUp() override {
+        TempDirTest::SetUp();
+        write("scene.yaml", R"(
+object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
+defects:
+  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 0.6}
+camera: {resolution: [16, 12], size: [25.0, 20.0], numerical_aperture: 0.002, samples_per_pixel: 16}
+display: {resolution: [50, 40], size: [100.0, 80.0], z: 60.0}
+)");
+        ASSERT_EQ(run("render " + path("scene.yaml") + " -o " + r()), 0);
+    }
+    // The render folder.
+    std::string r() const { return (dir / "r").string(); }
+};
+
 // TempDirTest whose TearDown ignores a failure to remove the folder (TempDirTest's lets the
 // std::filesystem::filesystem_error escape, which fails the test).
 class LenientTempDirTest : public TempDirTest {

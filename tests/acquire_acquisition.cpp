@@ -40,6 +40,22 @@ CsrMatrix random_T() {
     return T;
 }
 
+// A noise-free acquisition of random_T() with a black display (b = 0) by `method` with K patterns,
+// and the exact features of the same T (dark block 6 for both).
+std::pair<AcquireResult, FeatureImages> noise_free_reference(Method method, int K) {
+    const CsrMatrix T = random_T();
+    SensorModel s;
+    s.noise_free = true;
+    s.display.black_level = 0;
+    AcquireOptions o;
+    o.method = method;
+    o.patterns = K;
+    o.dark_block = 6;
+    FeatureOptions fo;
+    fo.dark_block = 6;
+    return {run_acquisition(T, kRows, 1, kDisplay, o, s), compute_features(T, kRows, 1, kDisplay, fo)};
+}
+
 TEST(Acquisition, BitIdenticalForAnyThreadCountAndNewNoiseForANewSeed) {
     const CsrMatrix T = random_T();
     SensorModel s;
@@ -59,18 +75,7 @@ TEST(Acquisition, BitIdenticalForAnyThreadCountAndNewNoiseForANewSeed) {
 // Noise-free, y_j = T L(x_j) exactly up to rounding: all on gives the row sum (BrightField), the
 // dark-field pattern b s + (1 - b) T x_dark; with b = 0 the features' own DarkField.
 TEST(Acquisition, NoiseFreeFieldsAreTheExactBrightAndDarkField) {
-    const CsrMatrix T = random_T();
-    SensorModel s;
-    s.noise_free = true;
-    s.display.black_level = 0;
-    AcquireOptions o;
-    o.method = Method::Fields;
-    o.patterns = 2;
-    o.dark_block = 6;
-    const AcquireResult r = run_acquisition(T, kRows, 1, kDisplay, o, s);
-    FeatureOptions fo;
-    fo.dark_block = 6;
-    const FeatureImages exact = compute_features(T, kRows, 1, kDisplay, fo);
+    const auto [r, exact] = noise_free_reference(Method::Fields, 2);
     for (const char* ch : {"BrightField", "DarkField"})
         for (int k = 0; k < kRows; ++k) {
             const double want = exact.channel(ch)[static_cast<std::size_t>(k)];
@@ -82,18 +87,7 @@ TEST(Acquisition, NoiseFreeFieldsAreTheExactBrightAndDarkField) {
 // Noise-free brute force measures every T[k, l] (black level subtracted), so the features of its
 // T-hat are those of T: counts and extents exactly.
 TEST(Acquisition, NoiseFreeBruteForceGivesTheExactFeatures) {
-    const CsrMatrix T = random_T();
-    SensorModel s;
-    s.noise_free = true;
-    s.display.black_level = 0;
-    AcquireOptions o;
-    o.method = Method::BruteForce;
-    o.patterns = kP * kQ;
-    o.dark_block = 6;
-    const AcquireResult r = run_acquisition(T, kRows, 1, kDisplay, o, s);
-    FeatureOptions fo;
-    fo.dark_block = 6;
-    const FeatureImages exact = compute_features(T, kRows, 1, kDisplay, fo);
+    const auto [r, exact] = noise_free_reference(Method::BruteForce, kP * kQ);
     for (const char* ch : {"ScatterCount", "ScatterWidth", "ScatterRows", "ScatterColumns", "ScatterDiameter"})
         for (int k = 0; k < kRows; ++k)
             EXPECT_EQ(r.features.channel(ch)[static_cast<std::size_t>(k)], exact.channel(ch)[static_cast<std::size_t>(k)])

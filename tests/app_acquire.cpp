@@ -17,27 +17,9 @@ namespace {
 
 using ltm::test::slurp;
 
-class AcquireCommand : public ltm::test::TempDirTest {
-protected:
-    int run(const std::string& args, std::string* err = nullptr) {
-        const ltm::test::Outcome r = ltm::test::ltmsim(args, dir, ltm::test::Capture::StderrOnly);
-        if (err) *err = r.err;
-        return r.status;
-    }
-    void SetUp() override {
-        TempDirTest::SetUp();
-        // 16 x 12 camera, 50 x 40 display: Gray code 2 (ceil log2 40 + ceil log2 50) = 24 patterns.
-        std::ofstream(dir / "scene.yaml") << R"(
-object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
-defects:
-  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 0.6}
-camera: {resolution: [16, 12], size: [25.0, 20.0], numerical_aperture: 0.002, samples_per_pixel: 16}
-display: {resolution: [50, 40], size: [100.0, 80.0], z: 60.0}
-)";
-        ASSERT_EQ(run("render " + (dir / "scene.yaml").string() + " -o " + r()), 0);
-    }
-    std::string r() const { return (dir / "r").string(); }
-};
+// The render folder dir/r of the small bubble scene (tests/TestSupport.h): 16 x 12 camera, 50 x 40
+// display, so Gray code needs 2 (ceil log2 40 + ceil log2 50) = 24 patterns.
+using AcquireCommand = ltm::test::RenderedFolderTest;
 
 std::map<std::string, std::vector<float>> channels_of(const fs::path& p) {
     int w = 0, h = 0;

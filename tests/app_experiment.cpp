@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "io/Image.h"
+#include "study/Experiment.h"
 #include "tests/TestSupport.h"
 
 namespace fs = std::filesystem;
@@ -48,7 +49,17 @@ TEST(PaperExperiment, ScatterFeaturesBeatTheBrightFieldOnTheSmallestBubbles) {
     for (const char* s : {"defect-free", "bubbles-r0.5", "bubbles-r1", "bubbles-r2"}) {
         EXPECT_TRUE(fs::exists(out / s / "ltm.npz")) << s;
         EXPECT_TRUE(fs::exists(out / s / "features.exr")) << s;
+        EXPECT_TRUE(fs::exists(out / s / "regions.json")) << s;
     }
+    // The regions the table measured, for later measurements of the same scene (ltmsim acquire):
+    // three bubbles in bubbles-r1, each with defect and surround pixels; none in the defect-free scene.
+    const auto regions = ltm::read_regions_json((out / "bubbles-r1" / "regions.json").string(), 100 * 100);
+    ASSERT_EQ(regions.size(), 3u);
+    for (const auto& g : regions) {
+        EXPECT_GE(g.defect_pixels.pixels.size(), 2u);
+        EXPECT_GE(g.surround.pixels.size(), 2u);
+    }
+    EXPECT_TRUE(ltm::read_regions_json((out / "defect-free" / "regions.json").string(), 100 * 100).empty());
 
     std::ifstream in(out / "contrast.csv");
     std::string line;

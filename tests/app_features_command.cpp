@@ -17,26 +17,8 @@ namespace {
 
 using ltm::test::slurp;
 
-class FeaturesCommand : public ltm::test::TempDirTest {
-protected:
-    // Runs `ltmsim <args>` and returns its exit status; stderr into *err if given, stdout dropped.
-    int run(const std::string& args, std::string* err = nullptr) {
-        const ltm::test::Outcome r = ltm::test::ltmsim(args, dir, ltm::test::Capture::StderrOnly);
-        if (err) *err = r.err;
-        return r.status;
-    }
-    void SetUp() override {
-        TempDirTest::SetUp();
-        std::ofstream(dir / "scene.yaml") << R"(
-object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
-defects:
-  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 0.6}
-camera: {resolution: [16, 12], size: [25.0, 20.0], numerical_aperture: 0.002, samples_per_pixel: 16}
-display: {resolution: [50, 40], size: [100.0, 80.0], z: 60.0}
-)";
-        ASSERT_EQ(run("render " + (dir / "scene.yaml").string() + " -o " + (dir / "r").string()), 0);
-    }
-};
+// The render folder dir/r of the small bubble scene (tests/TestSupport.h).
+using FeaturesCommand = ltm::test::RenderedFolderTest;
 
 }  // namespace
 

@@ -775,3 +775,37 @@ TEST(PseudoColourPng, ReadableAndTheSameCodes) {
     for (int k = 0; k < 3; ++k) EXPECT_EQ(code(back.at(L.image_y + 1, L.image_x + 5 * 4 + 1, k)), code(c[static_cast<std::size_t>(k)]));
     fs::remove_all(dir);
 }
+
+namespace {
+
+// A line plot is kLinePlotWidth x kLinePlotHeight, draws its series in their colours (the point
+// markers are filled squares of exactly that colour), skips what a log axis cannot show, and
+// refuses a series whose x and y differ in length.
+TEST(LinePlot, SizeColoursAndBadSeries) {
+    ltm::Series a;
+    a.name = "a";
+    a.x = {1, 10, 100};
+    a.y = {1, 0.1, 0.01};
+    a.colour = {1.0f, 0.0f, 0.0f};
+    ltm::Series b;
+    b.name = "b";
+    b.x = {1, 10, 100};
+    b.y = {0.0, NAN, 5};  // 0 and NaN cannot be drawn on a log axis
+    b.colour = {0.0f, 0.0f, 1.0f};
+    b.dashed = true;
+    const ltm::Image img = ltm::line_plot({a, b}, "title", "K", "error", true, true);
+    EXPECT_EQ(img.width, ltm::kLinePlotWidth);
+    EXPECT_EQ(img.height, ltm::kLinePlotHeight);
+    int red = 0, blue = 0;
+    for (int r = 0; r < img.height; ++r)
+        for (int c = 0; c < img.width; ++c) {
+            red += img.at(r, c, 0) == 1.0f && img.at(r, c, 1) == 0.0f && img.at(r, c, 2) == 0.0f;
+            blue += img.at(r, c, 0) == 0.0f && img.at(r, c, 1) == 0.0f && img.at(r, c, 2) == 1.0f;
+        }
+    EXPECT_GT(red, 3);   // three markers and the lines between them
+    EXPECT_GT(blue, 0);  // one marker, the legend's sample
+    b.y.pop_back();
+    EXPECT_THROW(ltm::line_plot({b}, "", "x", "y", false, false), std::invalid_argument);
+}
+
+}  // namespace
