@@ -99,11 +99,16 @@ Json channel_error(const std::vector<float>& est, const std::vector<float>& exac
 // The three CNRs of one defect in one channel (docs/acquisition.md, "Which noise"):
 //   exact     the exact-T feature's CNR: today's contrast table, whose noise is the simulator's
 //             Monte Carlo noise (the random Fresnel choices), which a real camera does not have;
-//   acquired  the estimated feature's CNR with its own surround noise (sensor and Monte Carlo);
+//   acquired  the estimated feature's CNR with its own surround spread: the sensor's noise, the
+//             surround's real structure, and only the Monte Carlo variation the sensor can see
+//             (entries below the detection threshold, the single far-off paths, are not
+//             measured). The measure the table and `visible` use: judged under the sensor model.
 //   sensor    the estimated feature's contrast over the sensor's noise alone: the std over the
 //             surround of (estimate - repeat) / sqrt 2, the repeat being the same acquisition with
-//             an independent noise seed (same T, same patterns: the Monte Carlo part cancels
-//             exactly). The instrument's claim rests on this one.
+//             an independent noise seed (same T, same patterns: everything but the sensor's noise
+//             cancels). An upper bound: it leaves out the surround's structure, so a decoder whose
+//             output the noise never changes (Gray code alone, counts far above the noise) gets
+//             an infinite value whatever its contrast.
 struct Cnrs {
     double exact = NAN, acquired = NAN, sensor = NAN;
 };
@@ -249,7 +254,7 @@ int run(const AcquireArgs& a) {
         results.push_back(std::move(kr));
     }
 
-    // The fewest patterns (of those run) at which each defect is visible, CNR >= 5 under the sensor.
+    // The fewest patterns (of those run) at which each defect is visible: acquired CNR >= 5.
     Json fewest = Json::array();
     for (std::size_t d = 0; d < regions.size(); ++d) {
         Json ch = Json::object();
@@ -257,7 +262,7 @@ int run(const AcquireArgs& a) {
             if (!exact.has(name)) continue;
             Json k = nullptr;
             for (const KResult& kr : results) {
-                const Json& c = kr.report["defects"][d]["channels"][name]["sensor"];
+                const Json& c = kr.report["defects"][d]["channels"][name]["acquired"];
                 if (c.is_number() && c.get<double>() >= kVisibleCnr) {
                     k = kr.K;
                     break;
@@ -288,14 +293,18 @@ int run(const AcquireArgs& a) {
           {"display", {{"black_level", dm.black_level}, {"gamma", dm.gamma}, {"bits", dm.bits}}}}},
         {"detection_sigmas", a.sigmas},
         {"visible_cnr", kVisibleCnr},
-        {"cnr_note", "exact: exact-T feature, Monte Carlo noise; acquired: estimate, its own surround noise; sensor: "
-                     "estimate's contrast over the sensor noise alone, the std of (estimate - repeat) / sqrt 2 in the "
-                     "surround, repeat = the same acquisition with an independent noise seed"},
+        {"cnr_note", "exact: exact-T feature, Monte Carlo noise (the contrast table's); acquired: estimate over its own "
+                     "surround spread (sensor noise, structure, the Monte Carlo variation the sensor sees), the one "
+                     "'visible' uses; sensor: estimate's contrast over the sensor noise alone, the std of (estimate - "
+                     "repeat) / sqrt 2 in the surround, repeat = the same acquisition with an independent noise seed "
+                     "(an upper bound)"},
         {"runs", Json::array()},
         {"visible", fewest}};
     for (const KResult& kr : results) report["runs"].push_back(kr.report);
 
-    // The figure: relative error of every channel against K, and the primary channel's CNR.
+    // The figure: the median |error| of every channel against K (in the channel's unit: the RMS is
+    // ruled by the few rows whose light is spread far, and relative errors mean nothing where the
+    // exact image is mostly 0, as the deflection map is), and the primary channel's CNR.
     std::vector<double> xs;
     for (const KResult& kr : results) xs.push_back(kr.K);
     std::vector<Series> err_series;
@@ -307,7 +316,7 @@ int run(const AcquireArgs& a) {
         s.name = name;
         s.x = xs;
         for (const KResult& kr : results) {
-            const Json& e = kr.report["errors"][name]["relative_rmse"];
+            const Json& e = kr.report["errors"][name]["median_abs_error"];
             s.y.push_back(e.is_number() ? e.get<double>() : NAN);
         }
         s.colour = series_colour(ci++, static_cast<int>(chans.size()));
@@ -327,13 +336,13 @@ int run(const AcquireArgs& a) {
             const Json& dj = kr.report["defects"][d];
             auto val = [](const Json& j) { return j.is_number() ? j.get<double>() : NAN; };
             if (dj["channels"].contains(primary)) {
-                acq.y.push_back(val(dj["channels"][primary]["sensor"]));
+                acq.y.push_back(val(dj["channels"][primary]["acquired"]));
                 ex.y.push_back(val(dj["channels"][primary]["exact"]));
             } else {
                 acq.y.push_back(NAN);
                 ex.y.push_back(NAN);
             }
-            bright.y.push_back(val(dj["bright_field"]["sensor"]));
+            bright.y.push_back(val(dj["bright_field"]["acquired"]));
         }
         for (Series* s : {&acq, &bright, &ex}) {
             s->x = xs;
@@ -343,8 +352,8 @@ int run(const AcquireArgs& a) {
     }
     const Image plot = montage(
         {{line_plot(err_series, fmt::format("{}: error against the exact features of T", a.method), "patterns K",
-                    "relative RMS error", true, true)},
-         {line_plot(cnr_series, fmt::format("{}: defect CNR under the sensor model", a.method), "patterns K",
+                    "median |error| (channel unit)", true, true)},
+         {line_plot(cnr_series, fmt::format("{}: defect CNR under the sensor model (acquired)", a.method), "patterns K",
                     "CNR", true, true)}},
         {}, {}, "");
 

@@ -3,15 +3,20 @@
 OUT/<scene>/acquire-*/report.json (standard library only).
 
 Table 1: per defect, the fewest patterns K (among those run) at which each method makes it
-visible, CNR >= 5 under the sensor model, in its best channel; beside it the bright field's CNR
-through the same sensor (one image) and the exact-T CNRs (today's contrast table: Monte Carlo
-noise). Table 2: each method's median |error| per channel at its largest K, over all scenes.
+visible, acquired CNR >= 5 (under the sensor model), in its best channel; beside it the bright
+field's CNR through the same sensor (one image) and the best exact-T CNR (today's contrast
+table: Monte Carlo noise). MeanX and MeanY are left out of "best channel": they are position
+maps, whose contrast is the lens's mapping, not the defect (the deflection map is their
+defect-free-subtracted form). Table 2: each method's median |error| per channel at its largest K, over all scenes.
 """
 import glob
 import json
 import math
 import os
 import sys
+
+
+ORDER = ["fields", "gray", "stripes", "compressive-w32", "compressive", "compressive-hadamard", "brute-force"]
 
 
 def num(v):
@@ -38,11 +43,10 @@ def main(out):
         r["_scene"] = os.path.basename(os.path.dirname(os.path.dirname(path)))
         r["_name"] = os.path.basename(os.path.dirname(path))[len("acquire-"):]
         reports.append(r)
-    methods = sorted({r["_name"] for r in reports}, key=lambda m: ["fields", "gray", "stripes", "compressive",
-                                                                   "compressive-hadamard", "brute-force"].index(m)
-                     if m in ["fields", "gray", "stripes", "compressive", "compressive-hadamard", "brute-force"] else 99)
+    methods = sorted({r["_name"] for r in reports}, key=lambda m: ORDER.index(m)
+                     if m in ORDER else 99)
     scenes = sorted({r["_scene"] for r in reports})
-    print("| scene | defect | bright field CNR (sensor, 1 image) | best exact-T CNR (MC noise) | "
+    print("| scene | defect | bright field CNR (acquired, 1 image) | best exact-T CNR (MC noise) | "
           + " | ".join(f"{m}: fewest K (channel, CNR)" for m in methods) + " |")
     print("|---|---|---|---|" + "---|" * len(methods))
     for scene in scenes:
@@ -51,7 +55,7 @@ def main(out):
         ndef = len(any_r["runs"][0]["defects"])
         for d in range(ndef):
             first = any_r["runs"][0]["defects"][d]
-            bright = num(first["bright_field"]["sensor"])
+            bright = num(first["bright_field"]["acquired"])
             exact_best, exact_ch = -1.0, ""
             cells = []
             for m in methods:
@@ -63,10 +67,12 @@ def main(out):
                 for run in r["runs"]:
                     dd = run["defects"][d]
                     for ch, c in dd["channels"].items():
+                        if ch in ("MeanX", "MeanY"):
+                            continue
                         e = num(c["exact"])
                         if not math.isnan(e) and e > exact_best:
                             exact_best, exact_ch = e, ch
-                        s = num(c["sensor"])
+                        s = num(c["acquired"])
                         if s >= r["visible_cnr"] and (best is None or run["patterns"] < best[0]
                                                       or (run["patterns"] == best[0] and s > best[2])):
                             best = (run["patterns"], ch, s)
