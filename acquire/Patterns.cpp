@@ -140,7 +140,16 @@ PatternBlock field_block(int P, int Q, int dark_block) {
 
 namespace {
 
-// Wraps d into [-h, h).
+// Decoded channels as camera-sized feature images.
+FeatureImages images(int columns, int rows, std::vector<std::pair<std::string, std::vector<float>>> channels) {
+    FeatureImages f;
+    f.width = columns;
+    f.height = rows;
+    f.channels = std::move(channels);
+    return f;
+}
+
+// Wraps d into [-period/2, period/2).
 double wrap(double d, double period) {
     d = std::fmod(d + period / 2, period);
     if (d < 0) d += period;
@@ -193,12 +202,7 @@ FeatureImages decode_mean_position(const Measurements& gray, const Measurements*
         mx[static_cast<std::size_t>(k)] = static_cast<float>(-display.width / 2 + (q + 0.5) * display.width / display.Q);
         my[static_cast<std::size_t>(k)] = static_cast<float>(display.height / 2 - (p + 0.5) * display.height / display.P);
     }
-    FeatureImages f;
-    f.width = camera_columns;
-    f.height = camera_rows;
-    f.channels.emplace_back("MeanX", std::move(mx));
-    f.channels.emplace_back("MeanY", std::move(my));
-    return f;
+    return images(camera_columns, camera_rows, {{"MeanX", std::move(mx)}, {"MeanY", std::move(my)}});
 }
 
 StripeSupport stripe_support(const Measurements& y, long pixel, int P, int Q, int width, const SensorModel& sensor,
@@ -238,13 +242,8 @@ FeatureImages decode_stripes(const Measurements& y, int camera_columns, int came
         rows[static_cast<std::size_t>(k)] = static_cast<float>(dr);
         sw[static_cast<std::size_t>(k)] = static_cast<float>(dr * display.Q + dc);
     }
-    FeatureImages f;
-    f.width = camera_columns;
-    f.height = camera_rows;
-    f.channels.emplace_back("ScatterWidth", std::move(sw));
-    f.channels.emplace_back("ScatterRows", std::move(rows));
-    f.channels.emplace_back("ScatterColumns", std::move(cols));
-    return f;
+    return images(camera_columns, camera_rows,
+                  {{"ScatterWidth", std::move(sw)}, {"ScatterRows", std::move(rows)}, {"ScatterColumns", std::move(cols)}});
 }
 
 FeatureImages decode_fields(const Measurements& y, int camera_columns, int camera_rows) {
@@ -254,12 +253,7 @@ FeatureImages decode_fields(const Measurements& y, int camera_columns, int camer
         bright[static_cast<std::size_t>(k)] = static_cast<float>(y.at(k, 0));
         dark[static_cast<std::size_t>(k)] = static_cast<float>(y.at(k, 1));
     }
-    FeatureImages f;
-    f.width = camera_columns;
-    f.height = camera_rows;
-    f.channels.emplace_back("BrightField", std::move(bright));
-    f.channels.emplace_back("DarkField", std::move(dark));
-    return f;
+    return images(camera_columns, camera_rows, {{"BrightField", std::move(bright)}, {"DarkField", std::move(dark)}});
 }
 
 }  // namespace ltm::acquire
