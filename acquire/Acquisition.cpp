@@ -268,6 +268,40 @@ std::vector<RowEntries> recover_compressive(const Measurements& stripes, const M
     return rows;
 }
 
+// Brute force: the entry estimate t_hat = (y_hat - b s) / (1 - b) above which a display pixel the
+// row does not see turns up, for all n of a row together, with probability at most
+// kFalseEntriesPerRow. A dark measurement is S + R electrons, S ~ Poisson(L), L = fe b s + dark,
+// R ~ N(0, r^2), so P(S + R > e) = sum_k P(S = k) Q((e - k) / r) (the step function for r = 0);
+// e is bisected for n P = kFalseEntriesPerRow and widened by half an ADC step (the rounding to DN).
+// Its Poisson tail is what a Gaussian sigma misses: for L ~ 6 and r = 2.4, 5 sigma (17 e- above
+// the mean) is exceeded with probability 2.3e-6 (a Gaussian 2.9e-7), 0.58 false entries per row of
+// 250 000; the cut for 0.01 lies at 6.0 sigma.
+constexpr double kFalseEntriesPerRow = 0.01;
+
+double dark_tail_cut(const SensorModel& sensor, double y_dark, long n) {
+    const CameraModel& c = sensor.camera;
+    const double fe = c.full_well * c.exposure, L = fe * y_dark + c.dark_level;
+    std::vector<double> pmf;
+    for (double p = std::exp(-L), k = 0; k < 100000 && (k < L || p > 1e-300); ++k, p *= L / k) pmf.push_back(p);
+    auto tail = [&](double e) {
+        double t = 0;
+        for (std::size_t k = 0; k < pmf.size(); ++k) {
+            const double d = e - static_cast<double>(k);
+            t += pmf[k] * (c.read_noise > 0 ? 0.5 * std::erfc(d / (c.read_noise * std::sqrt(2.0))) : (d < 0 ? 1.0 : 0.0));
+        }
+        return t;
+    };
+    double lo = L, hi = L + 10 * std::sqrt(L + c.read_noise * c.read_noise) + 100;
+    while (n * tail(hi) > kFalseEntriesPerRow) hi *= 2;
+    for (int i = 0; i < 60; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (n * tail(mid) > kFalseEntriesPerRow ? lo : hi) = mid;
+    }
+    const double e_cut = hi + 0.5 * adc_gain(c);
+    // y_hat = (e - dark) / fe, t_hat = (y_hat - b s) / (1 - b).
+    return ((e_cut - c.dark_level) / fe - y_dark) / (1 - sensor.display.black_level);
+}
+
 // Brute force: display pixel l alone is on in pattern l, so y_l = b s + (1 - b) T[k, l]; every
 // one of the P Q measurements of a row is taken (streamed per row, not stored as images), s is
 // estimated from their sum (n b + 1 - b) s, and an entry is kept where its estimate exceeds
@@ -299,10 +333,13 @@ std::vector<RowEntries> brute_force(const CsrMatrix& T, const AcquireOptions& o,
                 }
                 const double s_hat = sum / (n * b + 1 - b);
                 const double sd = std::sqrt(measurement_variance(sensor, b * s_hat)) / (1 - b);
+                // The threshold is also held above the dark law's own tail: n tests per row at a
+                // Gaussian 5 sigma let the heavier Poisson tail through.
+                const double cut = std::max(o.sigmas * sd, dark_tail_cut(sensor, b * s_hat, n));
                 RowEntries& out = rows[static_cast<std::size_t>(k)];
                 for (long l = 0; l < n; ++l) {
                     const double t_hat = (yhat[static_cast<std::size_t>(l)] - b * s_hat) / (1 - b);
-                    if (sensor.noise_free ? t_hat > 0 : t_hat > o.sigmas * sd)
+                    if (sensor.noise_free ? t_hat > 0 : t_hat > cut)
                         out.entries.emplace_back(static_cast<std::int32_t>(l), static_cast<float>(t_hat));
                 }
             }
