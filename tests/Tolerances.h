@@ -724,3 +724,14 @@ inline double omp_coefficient(int K, double max_abs) { return 64.0 * K * (kEps /
 inline double radiance_sum(double abs_sum) { return std::ldexp(abs_sum, -40); }
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// acquire_acquisition: brute force keeps at most 0.01 false entries per row in expectation
+// (acquire/Acquisition.cpp, kFalseEntriesPerRow), independently per measurement, so the false
+// entries of R rows are at most Poisson(0.01 R) (a sum of independent rare Bernoullis is
+// dominated by it, Le Cam). For R = 400, mean 4: P(N >= 15) = 2.0e-5 (the Poisson tail summed
+// directly), so at most 14 are allowed.
+constexpr int kBruteForceFalseEntries400Rows = 14;
+
+}  // namespace ltm::tol

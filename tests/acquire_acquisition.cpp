@@ -114,4 +114,34 @@ TEST(Acquisition, LineScanUnderNoiseSeesBrightEntriesAndNoNoise) {
     EXPECT_EQ(r.features.channel("ScatterColumns")[1], 0);
 }
 
+// Brute force under noise: a row holding one bright entry is measured over every display pixel;
+// the dark ones must not turn up as entries more often than the threshold's design allows
+// (Tolerances.h), and the bright entry must always be found.
+TEST(Acquisition, BruteForceUnderNoiseFindsFewFalseEntries) {
+    const int P = 100, Q = 100, rows = 400;
+    const DisplayGrid display{Q, P, 100.0, 100.0};
+    CsrMatrix T;
+    T.rows = rows;
+    T.cols = P * Q;
+    T.indptr.push_back(0);
+    for (int k = 0; k < rows; ++k) {
+        T.indices.push_back((k * 37) % (P * Q));
+        T.data.push_back(0.5f);
+        T.indptr.push_back(k + 1);
+    }
+    SensorModel s;
+    AcquireOptions o;
+    o.method = Method::BruteForce;
+    o.patterns = P * Q;
+    const AcquireResult r = run_acquisition(T, rows, 1, display, o, s);
+    int false_entries = 0, missed = 0;
+    for (int k = 0; k < rows; ++k) {
+        const float count = r.features.channel("ScatterCount")[static_cast<std::size_t>(k)];
+        false_entries += count > 1 ? static_cast<int>(count) - 1 : 0;
+        missed += count < 1;
+    }
+    EXPECT_LE(false_entries, tol::kBruteForceFalseEntries400Rows);
+    EXPECT_EQ(missed, 0);  // 0.5 of the light is 2600 electrons, hundreds of sigma
+}
+
 }  // namespace
