@@ -40,6 +40,8 @@ io::Json stats_json(const PathStats& s) {
             {"guard_hits", s.guard_hits},
             {"leak_retries", s.leak_retries},
             {"leaks_unresolved", s.leaks_unresolved},
+            {"seam_repairs", s.seam_repairs},
+            {"edge_chords", s.edge_chords},
             {"grin_segments", s.grin_segments},
             {"grin_evaluations", s.grin_evaluations},
             {"tet_crossings", s.tet_crossings},

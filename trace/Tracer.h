@@ -60,6 +60,10 @@ struct PathStats {
     std::uint64_t absorbed_particle = 0, absorbed_rim = 0, on_display = 0, off_display = 0, toward_camera = 0;
     std::uint64_t roulette_kills = 0, truncated = 0, nan_events = 0;
     std::uint64_t spurious_candidates = 0, guard_hits = 0, leak_retries = 0, leaks_unresolved = 0;
+    // Rays within rounding of an edge of the glass (Tracer::repair_medium): segments whose medium
+    // the geometry repaired, and chords through an edge too short to resolve. The path's media
+    // stay consistent; the refraction at the edge itself is lost.
+    std::uint64_t seam_repairs = 0, edge_chords = 0;
     // Curved paths: segments traced through a graded-index medium, path evaluations of the closed
     // forms, tetrahedra crossed, paths that found no exit (lost), |p|^2 != n^2 beyond
     // TraceTolerance's bound, walks that left their region other than through an exact surface.
@@ -145,7 +149,7 @@ private:
     Hit propagate(const State& st, PathStats& stats) const;
     // Straight segments, by representation.
     Hit straight_hit(const State& st, PathStats& stats) const;
-    Hit analytic_hit(const State& st) const;
+    Hit analytic_hit(const State& st, PathStats& stats) const;
     Hit refined_hit(const State& st, PathStats& stats) const;
     Hit mesh_only_hit(const State& st) const;
     // Curved segments.
@@ -192,10 +196,19 @@ private:
     Hit exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const;
     // Whether the root at t of surface `tag` along o + t d lies on the glass boundary of the exact
     // Boolean solid: for an object patch, outside every cutter; for a cutter's wall, where
-    // membership of that cutter changes, within the lens and outside the other cutters (the
-    // guard's own test). Surfaces of no cutter (enclosed ellipsoids, particles) always pass.
+    // membership of that cutter changes, within the lens and outside the other cutters; and, on
+    // a seam where those tests are undecided, wherever membership of the exact solid changes
+    // across the root (the edge rule). Surfaces of no cutter (enclosed ellipsoids, particles)
+    // always pass.
     bool on_glass_boundary(int tag, const Vec3& o, const Vec3& d, double t) const;
     double lens_slack(int tag, const Vec3& x) const;
+    bool in_glass(const Vec3& p) const;  // in the lens and outside every cutter
+    // A segment's medium from the geometry where the belief proved wrong (an edge crossed within
+    // rounding); the definition is at its use in Tracer.cpp.
+    Hit repair_medium(const State& st, Hit h, PathStats& stats) const;
+    // Where o + t d leaves the object's bounding box (t > 0), or 0 if it does not meet it.
+    double bounds_exit(const Vec3& o, const Vec3& d) const;
+    Aabb object_bounds_;
     double guard_step(int tag, const Vec3& x, const Vec3& d, double t) const;
     std::vector<int> tag_cutter_;  // per surface tag: its cutter's index in cutters_, or -1
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
