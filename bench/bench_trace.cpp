@@ -7,7 +7,7 @@
 //      with and without refinement, and for the analytic primitives (CSV: error_vs_time.csv);
 //   d. time and memory against samples per pixel and camera resolution (CSV: scaling.csv).
 // Usage: bench_trace [--threads N] [--reps R] [--out DIR] [--quick]
-//   --quick: a and b only, at 16 spp, ending with the ratio table (scripts/bench --quick).
+//   --quick: a and b only, at 64 spp, ending with the ratio table (scripts/bench --quick).
 #include <sys/resource.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
     const std::string out = args.out;
     const bool quick = args.quick;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-    const int spp = quick ? 16 : 256;
+    const int spp = quick ? 64 : 256;
     std::printf("threads %d, repetitions %d (medians)\n\n", threads, reps);
 
     // a + b.
