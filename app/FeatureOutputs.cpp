@@ -117,7 +117,7 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
             [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}); });
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
-                       {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}},
+                       {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}, {"reference_reused", run.reference_reused}},
                        report);
     } catch (...) {
         for (const auto& p : written) fs::remove(p, ec);

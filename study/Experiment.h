@@ -57,7 +57,9 @@ struct ExperimentScene {
 std::vector<ExperimentScene> load_experiment_scenes(const ExperimentSpec& spec);
 
 // Renders one scene (as `ltmsim render` does, reference included).
-void render_experiment_scene(ExperimentScene& s, int threads);
+// The scenes share `cache` (study/ReferenceCache.h): each pixel's defect-free reference is
+// rendered once for the experiment.
+void render_experiment_scene(ExperimentScene& s, int threads, ReferenceCache* cache = nullptr);
 
 struct ExperimentResult {
     std::string csv, markdown, best;
