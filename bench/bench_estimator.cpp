@@ -33,17 +33,6 @@ using bench::median;
 
 namespace {
 
-const char* kBubbles = R"(
-object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
-defects:
-  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 0.0997}
-  - {type: bubble, center: [4.0, 0.0, 0.0], radius: 0.0997}
-  - {type: bubble, center: [8.0, 0.0, 0.0], radius: 0.0997}
-camera: {resolution: [100, 100], size: [25.0, 25.0], numerical_aperture: 0.01, samples_per_pixel: 64}
-display: {resolution: [500, 500], size: [100.0, 100.0], z: 60.0}
-seed: 1
-)";
-
 const std::vector<std::string> kFeatures{"BrightField", "ScatterCount", "MeanX", "MeanY"};
 
 struct Measured {
@@ -174,6 +163,6 @@ int main(int argc, char** argv) {
                 "seconds: median render time; ratio: (var x s) / (var x s of the sample estimator)\n");
     run_scene("defect-free (scenes/paper/defect-free.yaml)",
               load_scene(std::string(LTM_SOURCE_DIR) + "/scenes/paper/defect-free.yaml"), args);
-    run_scene("bubbles (bench_trace's paper scene)", parse_scene(kBubbles, "bench_estimator"), args);
+    run_scene("bubbles (bench_trace's paper scene)", parse_scene(bench::paper_scene(100, 64), "bench_estimator"), args);
     return 0;
 }

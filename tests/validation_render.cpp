@@ -144,17 +144,13 @@ seed: 11
     const double zmax = tol::bonferroni_z(cam.pixels());
     double total_diff = 0, total_var = 0;
     for (long k = 0; k < cam.pixels(); ++k) {
-        const auto perm = cam.permutation(k, b.scene.seed);
         double expected = 0, var = 0, dropped = 0;
-        for (int s = 0; s < n; ++s) {
-            Rng rng(b.scene.seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
-            Vec3 o, d;
-            cam.sample(k, s, perm, rng, o, d);
+        for_each_camera_sample(cam, b.scene.seed, k, [&](int, Rng&, const Vec3& o, const Vec3& d) {
             const validation::AnalyticScene::SplitMoments m = reference.split_sample_moments(o, d, split_depth, 64, 1e-14);
             expected += m.mean / n;
             var += m.variance / (double(n) * n);
             dropped += m.dropped / n;
-        }
+        });
         double sum = 0;
         for (auto i = r.T.indptr[static_cast<size_t>(k)]; i < r.T.indptr[static_cast<size_t>(k) + 1]; ++i)
             sum += r.T.data[static_cast<size_t>(i)];

@@ -114,14 +114,10 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         std::vector<PathResult> branches;
         for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
             const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
-            const std::vector<int> perm = cam.permutation(k, seed);
             const size_t first_count = opt.track_defects ? block_defects[static_cast<size_t>(b)].size() : 0;
             entries.clear();
             double sum = 0, sum2 = 0;
-            for (int s = 0; s < spp; ++s) {
-                Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
-                Vec3 o, d;
-                cam.sample(k, s, perm, rng, o, d);
+            for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& o, const Vec3& d) {
                 branches.clear();
                 tracer.sample_paths(o, d, rng, stats, branches);
                 // The sample's value for the pattern: the sum of its branches' contributions.
@@ -153,7 +149,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                     sum += f;
                     sum2 += f * f;
                 }
-            }
+            });
             if (opt.track_defects) {
                 auto& list = block_defects[static_cast<size_t>(b)];
                 std::sort(list.begin() + static_cast<long>(first_count), list.end(),

@@ -70,4 +70,18 @@ inline std::vector<std::uint32_t> dense_defect_paths(const RenderResult& r, long
 // The seed a render with these options uses (scene.seed, or mixed with options.stream).
 std::uint64_t render_seed(const Scene& scene, const RenderOptions& options);
 
+// The camera samples of pixel k exactly as render() draws them with `seed`: for s = 0 .. spp - 1,
+// f(s, rng, origin, direction) with rng = Rng(seed, k, s) just after the camera took the ray from
+// it, where the path's own draws begin (so a caller can trace the render's very paths again).
+template <class F>
+void for_each_camera_sample(const TelecentricCamera& cam, std::uint64_t seed, long k, F&& f) {
+    const std::vector<int> perm = cam.permutation(k, seed);
+    for (int s = 0; s < cam.samples_per_pixel(); ++s) {
+        Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
+        Vec3 o, d;
+        cam.sample(k, s, perm, rng, o, d);
+        f(s, rng, o, d);
+    }
+}
+
 }  // namespace ltm
