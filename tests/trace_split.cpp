@@ -118,6 +118,13 @@ TEST(Split, TotalInternalReflectionIsNoSplit) {
     EXPECT_GE(stats.tir, 1u);
 }
 
+TEST(Split, ADepthBeyondTheStackIsRefusedNotClamped) {
+    const Built b = with_estimator(kWindow, Estimator::Split, kMaxSplitDepth + 1);
+    EXPECT_THROW(Tracer(b.scene, b.solid), std::invalid_argument);
+    const Built negative = with_estimator(kWindow, Estimator::Split, -1);
+    EXPECT_THROW(Tracer(negative.scene, negative.solid), std::invalid_argument);
+}
+
 TEST(Split, DepthZeroIsTheSampleEstimatorBitForBit) {
     // No split left from the start: every sample is the sampled path, with the same draws.
     const Built sample = with_estimator(kLens, Estimator::Sample, kDefaultSplitDepth);

@@ -126,6 +126,11 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
       lens_(scene.object.lens),
       display_(scene.display),
       camera_(scene.camera, std::min(lens_.z_front(0), lens_.z_front(lens_.aperture_radius())) - 1.0) {
+    // The scene loader admits [0, kMaxSplitDepth] only; a scene built in code is held to it too
+    // (the split stack's capacity), rather than clamped silently.
+    if (scene.tracing.split_depth < 0 || scene.tracing.split_depth > kMaxSplitDepth)
+        throw std::invalid_argument(fmt::format("Tracer: tracing.split_depth must be in [0, {}], got {}", kMaxSplitDepth,
+                                                scene.tracing.split_depth));
     const double a = lens_.aperture_radius();
     scale_ = std::max({a, lens_.spec().center_thickness, std::fabs(scene.display.z)});
     convex_ = lens_.is_convex();
@@ -982,7 +987,7 @@ void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, P
     st.o = origin;
     st.d = direction;
     st.medium = Medium::Air;
-    st.splits_left = std::min(tracing.split_depth, kMaxSplitDepth);
+    st.splits_left = tracing.split_depth;  // <= kMaxSplitDepth (the constructor checks)
     // Depth first, transmitted branch first: the order in which branches draw from `rng` and are
     // appended is fixed by the sample alone. After split_depth splits a branch is an ordinary
     // sampled path (random Fresnel choices, roulette from rr_depth) carrying its weight.
