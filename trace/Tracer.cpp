@@ -1,6 +1,7 @@
 #include "trace/Tracer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
@@ -50,6 +51,8 @@ void PathStats::merge(const PathStats& o) {
     roulette_kills += o.roulette_kills;
     truncated += o.truncated;
     nan_events += o.nan_events;
+    splits += o.splits;
+    branches += o.branches;
     spurious_candidates += o.spurious_candidates;
     guard_hits += o.guard_hits;
     leak_retries += o.leak_retries;
@@ -101,6 +104,19 @@ struct Tracer::State {
     // object (whose defects all lie inside it) can be met again.
     bool escaped = false;
     int defect = -1;  // PathResult::defect
+    int depth = 0;           // interactions so far (max_depth, rr_depth)
+    int splits_left = 0;     // Fresnel interactions this branch still splits (the split estimator)
+    int random_choices = 0;  // PathResult::random_choices
+};
+
+// The branches of a split camera sample that wait to be traced, depth first. Capacity: a split
+// pushes its reflected branch with one split fewer left than the branch had and the traced
+// branch continues with as many, so from bottom to top the stack holds strictly decreasing
+// numbers of splits left, all at least the traced branch's, all in [0, split_depth - 1]: at most
+// split_depth states, whatever the tree. A fixed array: no allocation per camera sample.
+struct Tracer::SplitStack {
+    std::array<State, kMaxSplitDepth> items;
+    int size = 0;
 };
 
 Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
@@ -110,6 +126,11 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
       lens_(scene.object.lens),
       display_(scene.display),
       camera_(scene.camera, std::min(lens_.z_front(0), lens_.z_front(lens_.aperture_radius())) - 1.0) {
+    // The scene loader admits [0, kMaxSplitDepth] only; a scene built in code is held to it too
+    // (the split stack's capacity), rather than clamped silently.
+    if (scene.tracing.split_depth < 0 || scene.tracing.split_depth > kMaxSplitDepth)
+        throw std::invalid_argument(fmt::format("Tracer: tracing.split_depth must be in [0, {}], got {}", kMaxSplitDepth,
+                                                scene.tracing.split_depth));
     const double a = lens_.aperture_radius();
     scale_ = std::max({a, lens_.spec().center_thickness, std::fabs(scene.display.z)});
     convex_ = lens_.is_convex();
@@ -710,10 +731,39 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
 }
 
 template <bool Principal>
-void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) const {
+void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, SplitStack* split) const {
     const SurfaceTable& table = solid_.surfaces;
     const double alpha = scene_.object.absorption;
-    for (int depth = 0;; ++depth) {
+    // Spawns the ray leaving the interface h along nd (unit; nf the normal on the incident side)
+    // into `s`: false (and counted) if the direction is not finite.
+    const auto spawn = [&](State& s, const Hit& h, const Vec3& nd, const Vec3& nf) {
+        if (!is_finite(nd)) {
+            ++stats.nan_events;
+            return false;
+        }
+        // Spawn clear of the surface on the side the new direction goes to. Stepping along the new
+        // direction by offset / cos clears it by `offset` in normal distance without moving the
+        // ray sideways (an offset along the normal would shift the whole continuing path by up
+        // to the offset); near-tangent directions fall back to the normal offset.
+        const double cos_new = std::fabs(dot(nd, nf));
+        const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
+        s.o = cos_new > trace_tol::kSpawnMinCos ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
+        s.d = nd;
+        s.skip = h.triangle;
+        s.skip_prim = h.prim;
+        // The band in which the facet just left may still lie ahead of the ray: the chord error
+        // over the cosine, plus float rounding.
+        if (h.triangle) {
+            const double e = options_.representation == Representation::MeshOnly
+                                 ? 0.0
+                                 : solid_.tag_chord_error[static_cast<size_t>(h.tag)];
+            s.skip_until = (trace_tol::kSkipChords * e + trace_tol::kSkipFloatUlps * kFloatUlp * scale_) /
+                           std::max(std::fabs(dot(nd, nf)), trace_tol::kCandidateMinCos);
+        }
+        return true;
+    };
+    for (;; ++st.depth) {
+        const int depth = st.depth;
         if (depth >= options_.max_depth) {
             ++stats.truncated;
             stats.lost_weight += st.weight;
@@ -761,6 +811,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
                 if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(h.p, h.p) < 1.0) to = Medium::inclusion(k);
         const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
         Vec3 nd;
+        bool split_here = false;
         if (!s.optical) {
             // A smooth inhomogeneity's boundary: the index is continuous, so the ray keeps its
             // direction and only changes how it propagates. The part of the boundary outside the
@@ -798,8 +849,31 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
                 if (rec) ++rec->tir;
             } else if (Principal) {
                 reflect_it = false;
+            } else if (split && st.splits_left > 0) {
+                // Splitting. The sampled choice contributes w f_R (reflect, probability R) or w f_T
+                // (transmit, probability T), where f_R and f_T are what the rest of the path
+                // delivers after each branch; its expectation is R w E[f_R] + T w E[f_T]. Following
+                // both, with weights w R and w T, delivers that expectation itself: unbiased, and
+                // the Fresnel choice's variance is gone. The reflected branch waits on the stack
+                // with the splits this one has left; the transmitted one goes on here.
+                --st.splits_left;
+                ++stats.splits;
+                split_here = true;
+                const double w_reflected = st.weight * F.reflectance;
+                if (w_reflected > 0) {
+                    if (split->size >= kMaxSplitDepth)  // impossible by the capacity argument (SplitStack)
+                        throw std::logic_error("Tracer: split stack overflow");
+                    State& r = split->items[static_cast<size_t>(split->size)];
+                    r = st;
+                    r.weight = w_reflected;
+                    r.depth = depth + 1;  // it resumes at the next interaction
+                    if (spawn(r, h, normalize(reflect(d_in, nf)), nf)) ++split->size;
+                }
+                st.weight *= 1.0 - F.reflectance;
+                reflect_it = false;
             } else {
                 reflect_it = rng->uniform() < F.reflectance;
+                ++st.random_choices;
             }
             if (reflect_it) {
                 nd = reflect(d_in, nf);
@@ -809,37 +883,22 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
                 st.medium = to;
                 st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
                              from == Medium::Glass && to == Medium::Air;
-                ++stats.transmissions;
+                if (!split_here) ++stats.transmissions;  // a split counts as one split
                 if (rec) rec->transmission *= 1.0 - F.reflectance;
             }
             nd = normalize(nd);
         }
-        if (!is_finite(nd)) {
-            ++stats.nan_events;
+        if (!spawn(st, h, nd, nf)) {
             if (rec) rec->nan = true;
             st.weight = 0;
             return;
         }
-        // Spawn clear of the surface on the side the new direction goes to. Stepping along the new
-        // direction by offset / cos clears it by `offset` in normal distance without moving the
-        // ray sideways (an offset along the normal would shift the whole continuing path by up
-        // to the offset); near-tangent directions fall back to the normal offset.
-        const double cos_new = std::fabs(dot(nd, nf));
-        const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
-        st.o = cos_new > trace_tol::kSpawnMinCos ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
-        st.d = nd;
-        st.skip = h.triangle;
-        st.skip_prim = h.prim;
-        // The band in which the facet just left may still lie ahead of the ray: the chord error
-        // over the cosine, plus float rounding.
-        if (h.triangle) {
-            const double e = options_.representation == Representation::MeshOnly
-                                 ? 0.0
-                                 : solid_.tag_chord_error[static_cast<size_t>(h.tag)];
-            st.skip_until = (trace_tol::kSkipChords * e + trace_tol::kSkipFloatUlps * kFloatUlp * scale_) /
-                            std::max(std::fabs(dot(nd, nf)), trace_tol::kCandidateMinCos);
-        }
-        if (!Principal && depth + 1 >= options_.rr_depth) {
+        // Russian roulette: survive with probability q, weight / q, so the expected weight is
+        // unchanged (q (w / q) + (1 - q) 0 = w). A split interaction is exempt: its branches stay
+        // deterministic, which is what makes the low orders exact. Past the split depth a branch
+        // is an ordinary sampled path and meets roulette at the same interactions as one.
+        if (!Principal && !split_here && depth + 1 >= options_.rr_depth) {
+            ++st.random_choices;
             if (rng->uniform() >= options_.rr_survival) {
                 ++stats.roulette_kills;
                 if (rec) rec->roulette = true;
@@ -877,7 +936,7 @@ PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) 
         rec.direction = st.d;
         return rec;
     }
-    run<true>(st, nullptr, stats, &rec);
+    run<true>(st, nullptr, stats, &rec, nullptr);
     rec.media.push_back(st.medium);
     rec.direction = st.d;
     if (!rec.absorbed && !rec.truncated && !rec.nan && !rec.lost && st.medium == Medium::Air && st.d.z > 0) {
@@ -899,8 +958,8 @@ PrincipalPath Tracer::recorded_path(const Vec3& origin, const Vec3& direction, M
     st.o = origin;
     st.d = normalize_any(direction);
     st.medium = medium;
-    if (rng) run<false>(st, rng, stats, &rec);
-    else run<true>(st, nullptr, stats, &rec);
+    if (rng) run<false>(st, rng, stats, &rec, nullptr);
+    else run<true>(st, nullptr, stats, &rec, nullptr);
     rec.media.push_back(st.medium);
     rec.direction = st.d;
     return rec;
@@ -912,9 +971,40 @@ PathResult Tracer::sample_path(const Vec3& origin, const Vec3& direction, Rng& r
     st.o = origin;
     st.d = direction;
     st.medium = Medium::Air;
-    run<false>(st, &rng, stats, nullptr);
+    run<false>(st, &rng, stats, nullptr, nullptr);
+    return branch_result(st, stats);
+}
+
+void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
+                          std::vector<PathResult>& out) const {
+    const TracingDesc& tracing = scene_.tracing;
+    if (tracing.estimator == Estimator::Sample || tracing.split_depth == 0) {
+        out.push_back(sample_path(origin, direction, rng, stats));
+        return;
+    }
+    ++stats.paths;
+    State st;
+    st.o = origin;
+    st.d = direction;
+    st.medium = Medium::Air;
+    st.splits_left = tracing.split_depth;  // <= kMaxSplitDepth (the constructor checks)
+    // Depth first, transmitted branch first: the order in which branches draw from `rng` and are
+    // appended is fixed by the sample alone. After split_depth splits a branch is an ordinary
+    // sampled path (random Fresnel choices, roulette from rr_depth) carrying its weight.
+    SplitStack pending;
+    for (;;) {
+        run<false>(st, &rng, stats, nullptr, &pending);
+        out.push_back(branch_result(st, stats));
+        if (pending.size == 0) return;
+        st = pending.items[static_cast<size_t>(--pending.size)];
+    }
+}
+
+PathResult Tracer::branch_result(const State& st, PathStats& stats) const {
+    ++stats.branches;
     PathResult r;
     r.defect = st.defect;
+    r.random_choices = st.random_choices;
     if (st.weight == 0) return r;
     if (st.d.z <= 0) {
         ++stats.toward_camera;
