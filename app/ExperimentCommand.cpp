@@ -53,9 +53,19 @@ int run(const ExperimentArgs& a) {
         return 2;
     }
     fs::create_directories(a.out);
-    for (ExperimentScene& s : scenes) {
+    // The reference scene first: a defect-free scene gives every pixel's reference, which the
+    // others then reuse instead of rendering their own.
+    // (The order of rendering only; the montage keeps the spec's order.)
+    std::vector<ExperimentScene*> order;
+    for (ExperimentScene& s : scenes)
+        if (s.scene.defects.empty()) order.push_back(&s);
+    for (ExperimentScene& s : scenes)
+        if (!s.scene.defects.empty()) order.push_back(&s);
+    ReferenceCache references;
+    for (ExperimentScene* p : order) {
+        ExperimentScene& s = *p;
         std::cerr << fmt::format("rendering {} ({})\n", s.file, s.label);
-        render_experiment_scene(s, a.threads);
+        render_experiment_scene(s, a.threads, &references);
         StageReport report;
         write_render_folder((fs::path(a.out) / s.stem).string(), s.scene, s.run, a.threads, report);
     }

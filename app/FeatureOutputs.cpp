@@ -34,12 +34,16 @@ io::Json stats_json(const PathStats& s) {
             {"off_display", s.off_display},
             {"toward_camera", s.toward_camera},
             {"roulette_kills", s.roulette_kills},
+            {"splits", s.splits},
+            {"branches", s.branches},
             {"truncated", s.truncated},
             {"nan_events", s.nan_events},
             {"spurious_candidates", s.spurious_candidates},
             {"guard_hits", s.guard_hits},
             {"leak_retries", s.leak_retries},
             {"leaks_unresolved", s.leaks_unresolved},
+            {"seam_repairs", s.seam_repairs},
+            {"edge_chords", s.edge_chords},
             {"grin_segments", s.grin_segments},
             {"grin_evaluations", s.grin_evaluations},
             {"tet_crossings", s.tet_crossings},
@@ -79,6 +83,7 @@ void write_run_json(const std::string& dir, const Scene& scene, const RenderResu
                           {"scene", scene_to_json(scene)},
                           {"seed", scene.seed},
                           {"representation", to_string(representation)},
+                          {"estimator", tracing_to_json(scene.tracing)},
                           {"threads", threads},
                           {"result", result},
                           {"render_seconds", io::json_number(r.seconds)},
@@ -115,7 +120,7 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
             [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}); });
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
-                       {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}},
+                       {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}, {"reference_reused", run.reference_reused}},
                        report);
     } catch (...) {
         for (const auto& p : written) fs::remove(p, ec);

@@ -26,7 +26,8 @@ struct RenderGeometry {
 
 RenderGeometry render_geometry(const Scene& scene);
 
-// DIR/run.json: the resolved scene, seed, version, representation, timings and path statistics;
+// DIR/run.json: the resolved scene, seed, version, representation, estimator ({"estimator":
+// "split", "split_depth": 4} or {"estimator": "sample"}), timings and path statistics;
 // `result` is a JSON object describing what was rendered.
 void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
                     int threads, const io::Json& result, const StageReport& report);

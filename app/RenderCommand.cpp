@@ -24,6 +24,7 @@ struct RenderArgs {
     int threads = 0;
     bool overwrite = false, verbose = false, no_robust = false;
     FeatureOptions features{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
+    EstimatorArgs estimator;                  // overrides the scene's tracing section
 };
 
 int run(const RenderArgs& a) {
@@ -43,7 +44,8 @@ int run(const RenderArgs& a) {
     // auto and analytic trace closed forms where no defect cuts the glass: no mesh is built then.
     auto loaded = load_scene_and_solid(a.scene, report, status, representation_uses_surfaces_only(a.representation));
     if (!loaded) return status;
-    const Scene& scene = loaded->scene;
+    if (!apply_estimator_options("render", a.estimator, loaded->scene)) return 2;
+    const Scene& scene = loaded->scene;  // with the estimator the render uses (run.json records it)
 
     if (a.features.dark_block > std::min(scene.display.resolution[0], scene.display.resolution[1])) {
         std::cerr << fmt::format("ltmsim render: --dark-block {} exceeds the display's {} x {} pixels ({})\n",
@@ -155,6 +157,7 @@ void add_render_command(CLI::App& app) {
         ->check(CLI::NonNegativeNumber);
     add_representation_option(cmd, args->representation, {"auto", "refined", "analytic", "mesh-only"});
     cmd->add_flag("--no-robust", args->no_robust, "Embree's fast (non-watertight) traversal");
+    add_estimator_options(cmd, args->estimator);
     cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");

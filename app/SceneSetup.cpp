@@ -81,4 +81,30 @@ void add_representation_option(CLI::App* cmd, std::string& value, const std::vec
     cmd->add_option("--representation", value, help)->check(CLI::IsMember(choices));
 }
 
+void add_estimator_options(CLI::App* cmd, EstimatorArgs& args) {
+    cmd->add_option("--estimator", args.estimator,
+                    "sample (one path per camera sample, Fresnel branch chosen at random) | split (both Fresnel "
+                    "branches followed, weights R and T, for the first --split-depth interactions); overrides the "
+                    "scene's tracing.estimator")
+        ->check(CLI::IsMember({"sample", "split"}));
+    cmd->add_option("--split-depth", args.split_depth,
+                    fmt::format("Fresnel interactions split per path, 0 to {} (default: the scene's tracing.split_depth, "
+                                "else {}); with --estimator split only",
+                                kMaxSplitDepth, kDefaultSplitDepth))
+        ->check(CLI::Range(0, kMaxSplitDepth));
+}
+
+bool apply_estimator_options(const std::string& command, const EstimatorArgs& args, Scene& scene) {
+    if (!args.estimator.empty()) scene.tracing.estimator = args.estimator == "split" ? Estimator::Split : Estimator::Sample;
+    if (args.split_depth < 0) return true;
+    if (scene.tracing.estimator != Estimator::Split) {
+        std::cerr << fmt::format("ltmsim {}: {}: --split-depth applies only to the split estimator (the estimator is "
+                                 "sample{}); add --estimator split\n",
+                                 command, scene.source, args.estimator.empty() ? ", the scene's" : "");
+        return false;
+    }
+    scene.tracing.split_depth = args.split_depth;
+    return true;
+}
+
 }  // namespace ltm::app

@@ -38,6 +38,18 @@ inline bool representation_uses_surfaces_only(const std::string& name) { return 
 // Adds --representation to `cmd`, accepting the given names (a subset of auto, refined, analytic, mesh-only).
 void add_representation_option(CLI::App* cmd, std::string& value, const std::vector<std::string>& choices);
 
+// --estimator sample|split and --split-depth N (0..kMaxSplitDepth): the scene's `tracing` section
+// from the command line, which overrides it. Unset options (empty name, depth -1) keep the scene's.
+struct EstimatorArgs {
+    std::string estimator;
+    int split_depth = -1;
+};
+void add_estimator_options(CLI::App* cmd, EstimatorArgs& args);
+// Applies `args` to scene.tracing. --split-depth with an estimator that resolves to sample would be
+// ignored, so it is refused: prints "ltmsim COMMAND: SOURCE: --split-depth applies only to ..." and
+// returns false (exit status 2).
+bool apply_estimator_options(const std::string& command, const EstimatorArgs& args, Scene& scene);
+
 // The stages that ran (--verbose), then what did not run: "(no Boolean ran)" for a scene whose
 // defects cut nothing, "(no TetGen ran)" for one without a meshed index region.
 std::string verbose_stages(const StageReport& report);

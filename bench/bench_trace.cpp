@@ -7,6 +7,7 @@
 //      with and without refinement, and for the analytic primitives (CSV: error_vs_time.csv);
 //   d. time and memory against samples per pixel and camera resolution (CSV: scaling.csv).
 // Usage: bench_trace [--threads N] [--reps R] [--out DIR] [--quick]
+//   --quick: a and b only, at 64 spp, ending with the ratio table (scripts/bench --quick).
 #include <sys/resource.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -28,26 +29,10 @@
 using namespace ltm;
 using bench::median;
 using bench::now;
+using bench::paper_scene;
 using bench::record_segments;
 
 namespace {
-
-std::string paper_scene(int n, int spp, double chord = 1e-3) {
-    char buf[1024];
-    std::snprintf(buf, sizeof buf, R"(
-object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
-defects:
-  - {type: bubble, center: [0.0, 0.0, 0.0], radius: 0.0997}
-  - {type: bubble, center: [4.0, 0.0, 0.0], radius: 0.0997}
-  - {type: bubble, center: [8.0, 0.0, 0.0], radius: 0.0997}
-camera: {resolution: [%d, %d], size: [25.0, 25.0], numerical_aperture: 0.01, samples_per_pixel: %d}
-display: {resolution: [500, 500], size: [100.0, 100.0], z: 60.0}
-mesh: {chord_tolerance: %g}
-seed: 1
-)",
-                  n, n, spp, chord);
-    return buf;
-}
 
 struct Setup {
     Scene scene;
@@ -68,14 +53,14 @@ int main(int argc, char** argv) {
     const std::string out = args.out;
     const bool quick = args.quick;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-    const int spp = quick ? 16 : 256;
+    const int spp = quick ? 64 : 256;
     std::printf("threads %d, repetitions %d (medians)\n\n", threads, reps);
 
     // a + b.
     const Setup paper = setup(paper_scene(100, spp));
     std::printf("a. paper scene, 100 x 100 x %d spp, %zu mesh triangles\n", spp, paper.solid.mesh.num_triangles());
     std::printf("%-10s %12s %14s %16s %12s\n", "repr", "seconds", "Mpaths/s", "Msegments/s", "seg/path");
-    double refined_seg_rate = 0, analytic_seg_rate = 0;
+    double refined_seg_rate = 0, analytic_seg_rate = 0, mesh_seg_rate = 0;
     std::uint64_t segments = 0;
     for (auto rep : {Representation::Analytic, Representation::Refined, Representation::MeshOnly}) {
         TracerOptions o;
@@ -96,6 +81,7 @@ int main(int argc, char** argv) {
             segments = r.stats.segments;
         }
         if (rep == Representation::Analytic) analytic_seg_rate = seg_rate;
+        if (rep == Representation::MeshOnly) mesh_seg_rate = seg_rate;
         std::printf("%-10s %12.3f %14.3f %16.3f %12.3f\n", to_string(rep), s, r.stats.paths / s / 1e6, seg_rate / 1e6,
                     double(r.stats.segments) / r.stats.paths);
     }
@@ -108,10 +94,18 @@ int main(int argc, char** argv) {
         const auto segs = record_segments(refined, 400);
         const double raw_rate = segments / bench::bare_embree_seconds(mesh, segs, segments, threads, reps);
         std::printf("\nb. %llu bare rtcIntersect1 calls (recorded path segments, replayed) on the same %zu triangles: "
-                    "%.3f Mrays/s\n   efficiency refined / bare = %.2f, analytic / bare = %.2f\n\n",
-                    static_cast<unsigned long long>(segments), paper.solid.mesh.num_triangles(), raw_rate / 1e6,
-                    refined_seg_rate / raw_rate, analytic_seg_rate / raw_rate);
+                    "%.3f Mrays/s\n\n",
+                    static_cast<unsigned long long>(segments), paper.solid.mesh.num_triangles(), raw_rate / 1e6);
+        // The ratio table (issue 11's targets): each representation's segments per second over the
+        // bare rtcIntersect1 rate, same segments, same threads, same run.
+        std::printf("ratio table: segments/s over bare rtcIntersect1, %d threads, this run\n", threads);
+        std::printf("%-12s %12s %8s %8s\n", "repr", "Msegments/s", "ratio", "target");
+        std::printf("%-12s %12.3f %8.2f %8s\n", "analytic", analytic_seg_rate / 1e6, analytic_seg_rate / raw_rate, ">= 1.0");
+        std::printf("%-12s %12.3f %8.2f %8s\n", "refined", refined_seg_rate / 1e6, refined_seg_rate / raw_rate, ">= 0.6");
+        std::printf("%-12s %12.3f %8.2f %8s\n", "mesh-only", mesh_seg_rate / 1e6, mesh_seg_rate / raw_rate, ">= 1.5");
+        std::printf("%-12s %12.3f %8.2f\n\n", "bare", raw_rate / 1e6, 1.0);
     }
+    if (quick) return 0;  // scripts/bench --quick: the ratio table only
 
     // c. error vs time.
     {

@@ -170,7 +170,12 @@ void build(const TriMesh& mesh, const SurfaceTable& table, BuiltMesh& out) {
             // Non-manifold (complex vertex / edge) or degenerate face: OpenMesh leaves the mesh
             // unchanged and returns an invalid handle. Keep the face with its own vertices.
             OmMesh::VertexHandle own[3];
-            for (int k = 0; k < 3; ++k) own[k] = om.add_vertex(om.point(vh[t[k]]));
+            // A copy of the point, not om.point()'s reference: add_vertex may grow the point
+            // array and read the reference after it moved (AddressSanitizer: heap-use-after-free).
+            for (int k = 0; k < 3; ++k) {
+                const OmMesh::Point p = om.point(vh[t[k]]);
+                own[k] = om.add_vertex(p);
+            }
             fh = om.add_face(own[0], own[1], own[2]);
             if (!fh.is_valid())
                 throw std::logic_error(fmt::format("OpenMesh rejected isolated triangle {}", f));

@@ -1,9 +1,16 @@
 #include "io/CsrMatrix.h"
 
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 namespace ltm {
+
+bool bit_identical(const CsrMatrix& a, const CsrMatrix& b) {
+    return a.rows == b.rows && a.cols == b.cols && a.indptr == b.indptr && a.indices == b.indices &&
+           a.data.size() == b.data.size() &&
+           (a.data.empty() || std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
+}
 
 CsrMatrix CsrMatrix::zeros(std::int64_t rows, std::int64_t cols) {
     CsrMatrix m;

@@ -37,4 +37,8 @@ struct CsrMatrix {
     void multiply(const float* x, double* y) const;
 };
 
+// The same shape, structure and value bits (memcmp of the values: -0 differs from 0): what "the
+// same T" means for reproducibility (a seed whatever the thread count, a pixel subset).
+bool bit_identical(const CsrMatrix& a, const CsrMatrix& b);
+
 }  // namespace ltm

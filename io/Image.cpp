@@ -110,9 +110,10 @@ void png_flush_fn(png_structp) {}
 
 // Encodes `samples` (rows top to bottom, each width * channels samples of bit_depth 8 or 16,
 // 16-bit ones big-endian) as a PNG into `encoded`; returns libpng's error ("" on success).
-// filters: the PNG row filters libpng may choose from (png_set_filter; -1: libpng's default).
+// filters: the PNG row filters libpng may choose from (png_set_filter; -1: libpng's default);
+// level: zlib's compression level (png_set_compression_level; -1: libpng's default, 6).
 std::string encode_png(int width, int height, int bit_depth, int color_type, std::vector<unsigned char>& samples,
-                       std::vector<unsigned char>& encoded, int filters = -1) {
+                       std::vector<unsigned char>& encoded, int filters = -1, int level = -1) {
     std::vector<png_bytep> rows(static_cast<std::size_t>(height));
     const std::size_t rowbytes = samples.size() / static_cast<std::size_t>(height);
     for (std::size_t r = 0; r < rows.size(); ++r) rows[r] = samples.data() + r * rowbytes;
@@ -127,6 +128,7 @@ std::string encode_png(int width, int height, int bit_depth, int color_type, std
             if (setjmp(png_jmpbuf(png)) == 0) {
                 png_set_write_fn(png, &io, png_write_fn, png_flush_fn);
                 if (filters >= 0) png_set_filter(png, PNG_FILTER_TYPE_BASE, filters);
+                if (level >= 0) png_set_compression_level(png, level);
                 png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth,
                              color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
                 png_write_info(png, info);
@@ -363,15 +365,17 @@ void write_png(const std::string& path, const Image& img) {
             fail("the value at row " + std::to_string(px / static_cast<std::size_t>(img.width)) + ", column " +
                  std::to_string(px % static_cast<std::size_t>(img.width)) + " is NaN");
         }
-        samples[i] = static_cast<unsigned char>(std::lround(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0));
+        // floor(x + 0.5) is lround(x) here: x = 255 v >= 0 has at most 32 significant bits (a float
+        // times 255), so x + 0.5 is exact in double and the truncation rounds half up, as lround.
+        samples[i] = static_cast<unsigned char>(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0 + 0.5);
     }
     std::vector<unsigned char> encoded;
     // No row filter: previews are flat colour and noisy data cells, which the adaptive filters do
     // not predict; unfiltered rows deflate ~10% smaller and ~35% faster (17 render previews:
-    // 171 -> 110 ms of encoding, 415 -> 367 kB).
+    // 171 -> 110 ms of encoding, 415 -> 367 kB). zlib level kPngLevel (see Image.h).
     const std::string error = encode_png(img.width, img.height, 8,
                                          img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, samples, encoded,
-                                         PNG_FILTER_NONE);
+                                         PNG_FILTER_NONE, kPngLevel);
     if (!error.empty()) fail("libpng: " + error);
     io::write_file(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()), "PNG image");
 }

@@ -38,6 +38,27 @@ struct DisplayDesc {
     double z = 60.0;                           // mm
 };
 
+// How each camera sample's paths are generated (the `tracing` section; docs/estimators.md).
+//  - Sample: one path per camera sample; at every Fresnel interface it reflects with probability R
+//    and transmits with probability T = 1 - R, its weight unchanged; Russian roulette from
+//    TracerOptions::rr_depth.
+//  - Split: the first split_depth Fresnel interactions of a path (total internal reflection is no
+//    choice and does not count) follow both branches, the reflected one with its weight times R,
+//    the transmitted one times T; beyond them each branch continues as Sample does.
+enum class Estimator { Sample, Split };
+inline const char* to_string(Estimator e) { return e == Estimator::Split ? "split" : "sample"; }
+// The deepest split the tracer supports: a sample has at most 2^depth branches, and the tracer's
+// fixed stack of pending branches holds depth states (trace/Tracer.cpp, sample_paths).
+constexpr int kMaxSplitDepth = 16;
+// With estimator: split and no split_depth: the direct image and the first ghost of a window or
+// lens (front, back, front, back: four interactions) are followed exactly.
+constexpr int kDefaultSplitDepth = 4;
+
+struct TracingDesc {
+    Estimator estimator = Estimator::Sample;
+    int split_depth = kDefaultSplitDepth;  // used by Split only
+};
+
 struct Scene {
     std::string source;                        // the file it was read from
     ObjectDesc object;
@@ -45,6 +66,7 @@ struct Scene {
     CameraDesc camera;
     DisplayDesc display;
     MeshOptions mesh;
+    TracingDesc tracing;
     std::uint64_t seed = 1;
 };
 

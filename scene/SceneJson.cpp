@@ -100,7 +100,14 @@ Json scene_to_json(const Scene& s) {
               {"defect_relative_tolerance", json_number(s.mesh.defect_relative_tolerance)},
               {"always_boolean", s.mesh.always_boolean},
               {"index_tolerance", json_number(s.mesh.index_tolerance)}}},
+            {"tracing", tracing_to_json(s.tracing)},
             {"seed", s.seed}};
+}
+
+Json tracing_to_json(const TracingDesc& t) {
+    Json j = {{"estimator", to_string(t.estimator)}};
+    if (t.estimator == Estimator::Split) j["split_depth"] = t.split_depth;  // Sample has no depth
+    return j;
 }
 
 }  // namespace ltm

@@ -69,6 +69,7 @@ private:
     void parse_camera(const Item& it, CameraDesc& camera) const;
     void parse_display(const Item& it, DisplayDesc& display, Loc& z_loc, bool& z_given) const;
     void parse_mesh(const Item& it, MeshOptions& mesh) const;
+    void parse_tracing(const Item& it, TracingDesc& tracing) const;
     void check_display(const ObjectDesc& object, const DisplayDesc& display, Loc z_loc, bool z_given) const;
 };
 
@@ -513,13 +514,38 @@ void SceneParser::parse_mesh(const Item& it, MeshOptions& mesh) const {
     });
 }
 
+// tracing: {estimator: sample | split, split_depth: 0..kMaxSplitDepth}. split_depth belongs to the
+// split estimator: given with sample (or without estimator, which is sample) it would be ignored,
+// so it is an error at the key.
+void SceneParser::parse_tracing(const Item& it, TracingDesc& tracing) const {
+    const std::string path = "tracing";
+    require_map(it, path);
+    KeyRule rule;
+    rule.keys = {"estimator", "split_depth"};
+    std::optional<Loc> depth_key;
+    const std::string depth_expected = fmt::format("an integer in [0, {}] (Fresnel interactions split)", kMaxSplitDepth);
+    walk(it.value, path, rule, [&](const Item& e) {
+        const std::string p = join_path(path, e.key);
+        const Loc at = e.value_loc();
+        if (e.key == "estimator") {
+            tracing.estimator = choice(e.value, at, p, {"sample", "split"}) == 0 ? Estimator::Sample : Estimator::Split;
+        } else if (e.key == "split_depth") {
+            tracing.split_depth = static_cast<int>(integer(e.value, at, p, 0, kMaxSplitDepth, depth_expected.c_str()));
+            depth_key = e.key_loc();
+        }
+    });
+    if (depth_key && tracing.estimator != Estimator::Split)
+        fail(*depth_key, join_path(path, "split_depth"),
+             "applies only to 'estimator: split' (the estimator here is sample); remove it or add 'estimator: split'");
+}
+
 // ---------------------------------------------------------------------------------------------
 // The document
 
 Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     Scene scene;
     scene.source = file();
-    const char* keys = "a mapping of scene keys (object, defects, camera, display, mesh, seed)";
+    const char* keys = "a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed)";
     if (!root.IsDefined() || root.IsNull()) {
         if (whole_file) fail({1, 1}, "", "the scene file is empty: expected a mapping with at least the key 'object'");
         // An undefined node (a key the caller looked up that is not there) has no mark.
@@ -547,7 +573,7 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     };
 
     KeyRule rule;
-    rule.keys = {"object", "defects", "camera", "display", "mesh", "seed"};
+    rule.keys = {"object", "defects", "camera", "display", "mesh", "tracing", "seed"};
     walk(root, "", rule, [&](const Item& e) {
         const Loc at = e.value_loc();
         if (e.key == "object") {
@@ -577,6 +603,8 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
             if (have_object) check_display(scene.object, scene.display, display_z_loc, display_z_given);
         } else if (e.key == "mesh") {
             parse_mesh(e, scene.mesh);
+        } else if (e.key == "tracing") {
+            parse_tracing(e, scene.tracing);
         } else if (e.key == "seed") {
             scene.seed = seed(e.value, at, "seed");
         }

@@ -214,6 +214,15 @@ std::string scene_to_yaml(const Scene& s) {
     out.put(2, "always_boolean", boolean(m.always_boolean));
     out.put(2, "index_tolerance", num(m.index_tolerance, "mesh.index_tolerance"));
 
+    // Only the split estimator has keys to write: the loader rejects split_depth with sample, and
+    // a sample scene's split_depth means nothing, so a sample scene is written without the section
+    // (as every scene was before the section existed).
+    if (s.tracing.estimator == Estimator::Split) {
+        out.open(0, "tracing");
+        out.put(2, "estimator", to_string(s.tracing.estimator));
+        out.put(2, "split_depth", fmt::format("{}", s.tracing.split_depth));
+    }
+
     out.put(0, "seed", fmt::format("{}", s.seed));
     return out.text();
 }

@@ -99,8 +99,9 @@ std::vector<ExperimentScene> load_experiment_scenes(const ExperimentSpec& spec) 
     return out;
 }
 
-void render_experiment_scene(ExperimentScene& s, int threads) {
+void render_experiment_scene(ExperimentScene& s, int threads, ReferenceCache* cache) {
     SceneRunOptions o;
+    o.reference_cache = cache;
     o.representation = auto_representation(s.solid);
     o.threads = threads;
     s.run = run_scene(s.scene, s.solid, o, nullptr);

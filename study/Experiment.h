@@ -58,7 +58,9 @@ struct ExperimentScene {
 std::vector<ExperimentScene> load_experiment_scenes(const ExperimentSpec& spec);
 
 // Renders one scene (as `ltmsim render` does, reference included).
-void render_experiment_scene(ExperimentScene& s, int threads);
+// The scenes share `cache` (study/ReferenceCache.h): each pixel's defect-free reference is
+// rendered once for the experiment.
+void render_experiment_scene(ExperimentScene& s, int threads, ReferenceCache* cache = nullptr);
 
 // The regions the contrast table measures for each defect of a rendered scene (see above; none for
 // a defect-free scene). `ltmsim experiment` writes them as OUT/<scene>/regions.json

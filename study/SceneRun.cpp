@@ -23,7 +23,8 @@ FeatureOptions resolved_feature_options(const Scene& s, FeatureOptions o) {
 
 std::vector<float> defect_free_reference(const Scene& scene, const RenderResult& own, const std::vector<float>& mx,
                                          const std::vector<float>& my, Representation representation,
-                                         const RenderOptions& options, long* rendered_pixels) {
+                                         const RenderOptions& options, long* rendered_pixels, ReferenceCache* cache,
+                                         long* reused_pixels) {
     const long K = static_cast<long>(mx.size());
     std::vector<float> ref(2 * static_cast<size_t>(K));
     for (long k = 0; k < K; ++k) {
@@ -31,18 +32,26 @@ std::vector<float> defect_free_reference(const Scene& scene, const RenderResult&
         ref[2 * static_cast<size_t>(k) + 1] = my[static_cast<size_t>(k)];
     }
     if (rendered_pixels) *rendered_pixels = 0;
+    if (reused_pixels) *reused_pixels = 0;
     if (scene.defects.empty()) return ref;
     if (!own.tracked_defects)
         throw std::invalid_argument("defect_free_reference: the render must track its defects (RenderOptions::track_defects)");
     std::vector<long> met;
     for (const DefectPaths& e : own.defect_paths)
         if (met.empty() || met.back() != e.pixel) met.push_back(e.pixel);
+    const Representation ref_rep = reference_representation(representation);
+    const std::string key = cache ? ReferenceCache::key(scene, render_seed(scene, options), ref_rep) : std::string();
+    if (cache) {
+        const size_t all = met.size();
+        met = cache->fill(key, met, K, ref);
+        if (reused_pixels) *reused_pixels = static_cast<long>(all - met.size());
+    }
     if (rendered_pixels) *rendered_pixels = static_cast<long>(met.size());
     if (met.empty()) return ref;
     const Scene free = defect_free(scene);
     const Solid free_solid = build_solid(free, nullptr, representation != Representation::MeshOnly);
     TracerOptions o;
-    o.representation = representation == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
+    o.representation = ref_rep;
     RenderOptions ro = options;
     ro.pattern = nullptr;
     ro.progress = false;
@@ -59,7 +68,12 @@ std::vector<float> defect_free_reference(const Scene& scene, const RenderResult&
         ref[2 * static_cast<size_t>(k)] = fx[static_cast<size_t>(k)];
         ref[2 * static_cast<size_t>(k) + 1] = fy[static_cast<size_t>(k)];
     }
+    if (cache) cache->store(key, met, K, ref);
     return ref;
+}
+
+Representation reference_representation(Representation r) {
+    return r == Representation::MeshOnly ? Representation::MeshOnly : Representation::Analytic;
 }
 
 SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions& options, StageReport* report) {
@@ -89,11 +103,22 @@ SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions
 
     StageTimer t_ref(report, "reference");
     out.reference = defect_free_reference(scene, r, out.features.channel("MeanX"), out.features.channel("MeanY"),
-                                          options.representation, ro, &out.reference_pixels);
+                                          options.representation, ro, &out.reference_pixels, options.reference_cache,
+                                          &out.reference_reused);
+    // A defect-free scene traced exactly as its reference would be (the same representation,
+    // Embree's default traversal, every entry > 0 counted in the means) is every pixel's reference.
+    if (options.reference_cache && scene.defects.empty() && options.representation == reference_representation(options.representation) &&
+        options.robust == TracerOptions{}.robust && options.features.threshold == 0) {
+        std::vector<long> all(static_cast<size_t>(out.reference.size() / 2));
+        for (size_t k = 0; k < all.size(); ++k) all[k] = static_cast<long>(k);
+        options.reference_cache->store(ReferenceCache::key(scene, render_seed(scene, ro), options.representation), all,
+                                       static_cast<long>(all.size()), out.reference);
+    }
     add_deflection(out.features, out.reference);  // exactly 0 for a defect-free scene (its own reference)
     t_ref.done(scene.defects.empty() ? std::string("the scene itself (defect-free)")
-                                     : fmt::format("defect-free object at the {} pixels whose paths met a defect",
-                                                   out.reference_pixels));
+                                     : fmt::format("defect-free object at the {} pixels whose paths met a defect "
+                                                   "({} more from the scenes before)",
+                                                   out.reference_pixels, out.reference_reused));
     return out;
 }
 

@@ -15,6 +15,7 @@
 #include "defects/SolidBuilder.h"
 #include "features/Features.h"
 #include "geometry/StageReport.h"
+#include "study/ReferenceCache.h"
 #include "scene/Scene.h"
 #include "trace/Render.h"
 #include "trace/Tracer.h"
@@ -28,6 +29,9 @@ struct SceneRunOptions {
     bool progress = false;
     // dark_block < 0: automatic, 60 display pixels or the display's smaller side if less.
     FeatureOptions features{0.0, 0.99, -1};
+    // Shared by scenes with the same object (study/ReferenceCache.h): each pixel's reference is
+    // rendered once for all of them. A defect-free scene run through it gives every pixel's.
+    ReferenceCache* reference_cache = nullptr;
 };
 
 struct SceneRun {
@@ -36,6 +40,7 @@ struct SceneRun {
     std::vector<float> reference;    // MeanX, MeanY of the defect-free object, 2 per camera pixel
     FeatureImages features;          // with Deflection* (exactly 0 for a defect-free scene)
     long reference_pixels = 0;       // pixels rendered again without the defects
+    long reference_reused = 0;       // pixels whose reference came from the cache
 };
 
 // Analytic where no defect cuts the glass (no mesh needed), else Refined.
@@ -54,6 +59,11 @@ SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions
 // scene is its own reference. `own_means`: own's MeanX and MeanY channels.
 std::vector<float> defect_free_reference(const Scene& scene, const RenderResult& own, const std::vector<float>& own_mean_x,
                                          const std::vector<float>& own_mean_y, Representation representation,
-                                         const RenderOptions& options, long* rendered_pixels = nullptr);
+                                         const RenderOptions& options, long* rendered_pixels = nullptr,
+                                         ReferenceCache* cache = nullptr, long* reused_pixels = nullptr);
+
+// The representation the reference is rendered in: the object without defects needs no mesh, so
+// Analytic, except that a mesh-only render keeps its own (its facets are what it measures).
+Representation reference_representation(Representation scene_representation);
 
 }  // namespace ltm

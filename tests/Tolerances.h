@@ -91,6 +91,23 @@ inline double throughput_series() { return 1e-12; }
 
 namespace ltm::tol {
 
+// ---- trace_split: the split estimator's deterministic branches against closed forms ----
+
+// A defect-free window at exact normal incidence: every deterministic branch weight is a product
+// of at most `depth` Fresnel factors (R or T = 1 - R) computed by trace/Optics.cpp, and the closed
+// form multiplies the same number of factors from R = ((n - 1) / (n + 1))^2. Each factor differs
+// between the two by at most ~8 u relative (the tracer: eta = n1 / n2 (1 rounding), eta cos_i -
+// cos_t and eta cos_i + cos_t (exact or 1 rounding each at cos_i = cos_t = 1), the quotient, the
+// square, the average of rs^2 and rp^2: ~6 u; the closed form ~3 u; T = 1 - R is better than R
+// relative since R < 1/2), each product adds 1 u per factor, and the sum of the floor(depth/2)
+// ghosts 1 u per term: (8 + 1) depth + depth / 2 < 10 (depth + 2) u, relative to the sum of
+// positive terms; 16 (depth + 2) u leaves a factor 1.6.
+inline double split_exact_relative(int depth) { return 16.0 * (depth + 2) * (kEps / 2); }
+
+}  // namespace ltm::tol
+
+namespace ltm::tol {
+
 // Two-sided normal quantile z with P(|Z| > z) = p, by bisection on erfc (exact to ~1e-12).
 inline double normal_two_sided_quantile(double p) {
     double lo = 0, hi = 40;

@@ -23,6 +23,7 @@
 #include "io/Image.h"
 #include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
+#include "io/Json.h"
 #include "io/LtmFile.h"
 
 namespace fs = std::filesystem;
@@ -507,4 +508,71 @@ TEST_F(RenderCommand, UsageErrorsExitTwo) {
     EXPECT_EQ(ltmsim(render(scene, out, "--threads -1"), dir).status, 2);
     EXPECT_EQ(ltmsim("render '" + scene.string() + "'", dir).status, 2);  // no -o
     EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderCommand, TheEstimatorComesFromTheSceneOrTheCommandLineAndRunJsonRecordsIt) {
+    // tracing: {estimator: split, split_depth: 5} in the scene; --estimator and --split-depth
+    // override it. run.json records what ran (top level and in the resolved scene), with the
+    // split and branch counts. --estimator sample on the split scene is the plain scene's render
+    // byte for byte, and a split render does not depend on --threads either.
+    const fs::path split_scene = write("split.yaml", scene_yaml(3) + "tracing: {estimator: split, split_depth: 5}\n");
+    const auto record = [&](const fs::path& out) { return ltm::io::read_json_file((out / "run.json").string(), "run record"); };
+    const Outcome a = ltmsim(render(split_scene, dir / "split", "--threads 1"), dir);
+    ASSERT_EQ(a.status, 0) << a.err;
+    const auto ra = record(dir / "split");
+    EXPECT_EQ(ra["estimator"]["estimator"], "split");
+    EXPECT_EQ(ra["estimator"]["split_depth"], 5);
+    EXPECT_EQ(ra["scene"]["tracing"], ra["estimator"]);
+    EXPECT_GT(ra["path_statistics"]["splits"].get<std::uint64_t>(), 0u);
+    EXPECT_GT(ra["path_statistics"]["branches"].get<std::uint64_t>(), ra["path_statistics"]["paths"].get<std::uint64_t>());
+
+    ASSERT_EQ(ltmsim(render(split_scene, dir / "split2", "--threads 2"), dir).status, 0);
+    EXPECT_TRUE(slurp(dir / "split" / "ltm.npz") == slurp(dir / "split2" / "ltm.npz"));
+
+    ASSERT_EQ(ltmsim(render(split_scene, dir / "deep", "--split-depth 7"), dir).status, 0);
+    EXPECT_EQ(record(dir / "deep")["estimator"]["split_depth"], 7);
+    EXPECT_FALSE(slurp(dir / "deep" / "ltm.npz") == slurp(dir / "split" / "ltm.npz"));
+
+    ASSERT_EQ(ltmsim(render(split_scene, dir / "sampled", "--estimator sample"), dir).status, 0);
+    ASSERT_EQ(ltmsim(render(scene, dir / "plain"), dir).status, 0);
+    const auto rs = record(dir / "sampled");
+    EXPECT_EQ(rs["estimator"], (ltm::io::Json{{"estimator", "sample"}}));
+    EXPECT_EQ(rs["path_statistics"]["splits"], 0);
+    EXPECT_EQ(record(dir / "plain")["estimator"], rs["estimator"]);
+    EXPECT_TRUE(slurp(dir / "sampled" / "ltm.npz") == slurp(dir / "plain" / "ltm.npz"));
+
+    ASSERT_EQ(ltmsim(render(scene, dir / "cli", "--estimator split"), dir).status, 0);
+    EXPECT_EQ(record(dir / "cli")["estimator"]["split_depth"], 4);  // kDefaultSplitDepth
+}
+
+TEST_F(RenderCommand, BadEstimatorInputExitsTwoWithALocatedMessage) {
+    const fs::path out = dir / "out";
+    struct Case {
+        std::string tracing, options, message;
+    };
+    const std::vector<Case> cases{
+        {"", "--split-depth -1", "--split-depth"},
+        {"", "--split-depth 17", "--split-depth"},
+        {"", "--estimator splitting", "--estimator"},
+        {"", "--split-depth 3", "--split-depth applies only to the split estimator"},
+        {"tracing: {estimator: split}\n", "--estimator sample --split-depth 3", "--split-depth applies only"},
+        // Scene keys: file:line:column and the key path (the tracing line is line 8).
+        {"tracing: {estimator: splitt}\n", "", ":8:22: tracing.estimator: expected sample or split"},
+        {"tracing: {estimator: split, split_depth: -1}\n", "", ":8:42: tracing.split_depth: expected an integer in [0, 16]"},
+        {"tracing: {estimator: split, split_depth: 2.5}\n", "", ":8:42: tracing.split_depth:"},
+        {"tracing: {split_depth: 3}\n", "", ":8:11: tracing.split_depth: applies only to 'estimator: split'"},
+        {"tracing: {estimator: split, depth: 3}\n", "", ":8:29: tracing.depth: unknown key"},
+        {"tracing: split\n", "", ":8:10: tracing:"},
+    };
+    int i = 0;
+    for (const Case& c : cases) {
+        const fs::path file = write("bad" + std::to_string(i++) + ".yaml", scene_yaml(3) + c.tracing);
+        const Outcome r = ltmsim(render(file, out, c.options), dir);
+        EXPECT_EQ(r.status, 2) << c.tracing << c.options << ": " << r.err;
+        EXPECT_NE(r.err.find(c.message), std::string::npos) << c.tracing << c.options << ": " << r.err;
+        if (c.options.empty()) {
+            EXPECT_NE(r.err.find(file.string() + ":8:"), std::string::npos) << r.err;
+        }
+        EXPECT_FALSE(fs::exists(out)) << c.tracing << c.options;
+    }
 }

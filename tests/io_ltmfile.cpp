@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -93,11 +92,7 @@ std::string py_hex(float f) {
     return buf;
 }
 
-bool same(const CsrMatrix& a, const CsrMatrix& b) {
-    return a.rows == b.rows && a.cols == b.cols && a.indptr == b.indptr && a.indices == b.indices &&
-           a.data.size() == b.data.size() &&
-           (a.data.empty() || std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
-}
+bool same(const CsrMatrix& a, const CsrMatrix& b) { return bit_identical(a, b); }
 
 CsrMatrix small_matrix() {
     // [[0, 0, 0, 0, 0],

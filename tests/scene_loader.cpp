@@ -59,7 +59,7 @@ TEST(SceneLoaderUnknownKey, TopLevelSuggestsTheNearestKey) {
 TEST(SceneLoaderUnknownKey, TopLevelWithoutNearMatchListsTheValidKeys) {
     EXPECT_EQ(error_of(kLens + "colour: red\n"),
               "scene.yaml:8:1: colour: unknown key 'colour'; valid keys are: object, defects, camera, display, "
-              "mesh, seed");
+              "mesh, tracing, seed");
 }
 
 TEST(SceneLoaderUnknownKey, InObjectSuggestsTheNearestKey) {
@@ -266,7 +266,7 @@ TEST(SceneLoaderStructure, MalformedYaml) {
 TEST(SceneLoaderStructure, EmptyFileAndWrongRoot) {
     EXPECT_EQ(error_of(""), "scene.yaml:1:1: the scene file is empty: expected a mapping with at least the key 'object'");
     EXPECT_EQ(error_of("- object\n"),
-              "scene.yaml:1:1: expected a mapping of scene keys (object, defects, camera, display, mesh, seed) at "
+              "scene.yaml:1:1: expected a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed) at "
               "the top level, got a list of 1 item");
 }
 
@@ -568,6 +568,26 @@ TEST(SceneLoaderValid, DefectFreeAndDefaults) {
 
 TEST(SceneLoaderValid, OverlappingDefects) {
     EXPECT_EQ(example("overlapping-defects.yaml").defects.size(), 4u);
+}
+
+TEST(SceneLoaderTracing, EstimatorAndDepth) {
+    const Scene plain = parse_scene(kLens, "scene.yaml");
+    EXPECT_EQ(plain.tracing.estimator, Estimator::Sample);
+    const Scene split = parse_scene(kLens + "tracing: {estimator: split}\n", "scene.yaml");
+    EXPECT_EQ(split.tracing.estimator, Estimator::Split);
+    EXPECT_EQ(split.tracing.split_depth, kDefaultSplitDepth);
+    // The order of the keys does not matter; 0 and the maximum are valid depths.
+    const Scene deep = parse_scene(kLens + "tracing:\n  split_depth: 16\n  estimator: split\n", "scene.yaml");
+    EXPECT_EQ(deep.tracing.split_depth, kMaxSplitDepth);
+    EXPECT_EQ(parse_scene(kLens + "tracing: {estimator: split, split_depth: 0}\n", "s.yaml").tracing.split_depth, 0);
+    EXPECT_EQ(error_of(kLens + "tracing: {estimator: split, split_depth: 17}\n"),
+              "scene.yaml:8:42: tracing.split_depth: expected an integer in [0, 16] (Fresnel interactions split) "
+              "(at most 16), got '17'");
+    EXPECT_EQ(error_of(kLens + "tracing:\n  estimator: sample\n  split_depth: 2\n"),
+              "scene.yaml:10:3: tracing.split_depth: applies only to 'estimator: split' (the estimator here is "
+              "sample); remove it or add 'estimator: split'");
+    EXPECT_EQ(error_of(kLens + "tracing: {estimator: Split}\n"),
+              "scene.yaml:8:22: tracing.estimator: expected sample or split, got 'Split' (did you mean 'split'?)");
 }
 
 }  // namespace

@@ -121,6 +121,9 @@ std::string differences(const Scene& a, const Scene& b) {
     d.bits("mesh.defect_relative_tolerance", a.mesh.defect_relative_tolerance, b.mesh.defect_relative_tolerance);
     d.same("mesh.always_boolean", a.mesh.always_boolean, b.mesh.always_boolean);
     d.bits("mesh.index_tolerance", a.mesh.index_tolerance, b.mesh.index_tolerance);
+    d.same("tracing.estimator", a.tracing.estimator, b.tracing.estimator);
+    // A sample scene's split_depth means nothing and is not written (scene/SceneYaml.cpp).
+    if (a.tracing.estimator == Estimator::Split) d.same("tracing.split_depth", a.tracing.split_depth, b.tracing.split_depth);
     d.same("seed", a.seed, b.seed);
     return d.text();
 }
@@ -366,6 +369,22 @@ TEST(SceneYaml, WritesEveryKeyOfAMinimalScene) {
               "  always_boolean: false\n"
               "  index_tolerance: 0.0001\n"
               "seed: 1\n");
+}
+
+TEST(SceneYaml, TheSplitEstimatorRoundTripsAndTheSampleOneWritesNoSection) {
+    for (int depth : {0, 1, kDefaultSplitDepth, kMaxSplitDepth}) {
+        Scene s = parse_scene(kLens, "split.yaml");
+        s.tracing.estimator = Estimator::Split;
+        s.tracing.split_depth = depth;
+        expect_round_trip(s, fmt::format("split depth {}", depth));
+        EXPECT_NE(scene_to_yaml(s).find(fmt::format("tracing:\n  estimator: split\n  split_depth: {}\nseed: 1\n", depth)),
+                  std::string::npos);
+    }
+    // The default estimator keeps the files written before the section existed byte for byte.
+    const Scene sample = parse_scene(kLens + "tracing: {estimator: sample}\n", "sample.yaml");
+    EXPECT_EQ(sample.tracing.estimator, Estimator::Sample);
+    EXPECT_EQ(scene_to_yaml(sample).find("tracing"), std::string::npos);
+    EXPECT_EQ(scene_to_yaml(sample), scene_to_yaml(parse_scene(kLens, "sample.yaml")));
 }
 
 TEST(SceneYaml, FormatsOfTheOtherObjectsAndDefects) {

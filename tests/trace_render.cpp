@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <set>
 #include <thread>
 
@@ -32,12 +31,6 @@ seed: 7
 using test::Built;
 using test::build;
 
-bool identical(const CsrMatrix& a, const CsrMatrix& b) {
-    return a.rows == b.rows && a.cols == b.cols && a.indptr == b.indptr && a.indices == b.indices &&
-           a.data.size() == b.data.size() &&
-           std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
-}
-
 }  // namespace
 
 TEST(Render, BitIdenticalWhateverTheThreadCount) {
@@ -52,14 +45,14 @@ TEST(Render, BitIdenticalWhateverTheThreadCount) {
         four.threads = 4;
         const RenderResult r1 = render(t, one), r2 = render(t, two), r4 = render(t, four);
         EXPECT_EQ(r1.T.check(), "");
-        EXPECT_TRUE(identical(r1.T, r2.T)) << to_string(rep);
-        EXPECT_TRUE(identical(r1.T, r4.T)) << to_string(rep);
+        EXPECT_TRUE(bit_identical(r1.T, r2.T)) << to_string(rep);
+        EXPECT_TRUE(bit_identical(r1.T, r4.T)) << to_string(rep);
         EXPECT_EQ(r1.stats.segments, r2.stats.segments);
         EXPECT_EQ(r1.stats.display_weight, r4.stats.display_weight);
         // A different seed gives a different estimate.
         RenderOptions other = one;
         other.stream = 1;
-        EXPECT_FALSE(identical(r1.T, render(t, other).T));
+        EXPECT_FALSE(bit_identical(r1.T, render(t, other).T));
     }
 }
 
@@ -78,8 +71,8 @@ TEST(Render, ConcurrentRendersInOneProcessShareNoThreadState) {
     std::thread tc([&] { c = render(t, two); });
     ta.join();
     tc.join();
-    EXPECT_TRUE(identical(alone.T, a.T));
-    EXPECT_TRUE(identical(alone.T, c.T));
+    EXPECT_TRUE(bit_identical(alone.T, a.T));
+    EXPECT_TRUE(bit_identical(alone.T, c.T));
 }
 
 TEST(Render, APixelSubsetGetsExactlyTheRowsOfTheFullRender) {
@@ -132,15 +125,11 @@ TEST(Render, DefectCountsAreTheSamplesWhosePathsMetEachDefectFirst) {
     long seen = 0;
     for (long k = 0; k < cam.pixels(); ++k) {
         std::uint32_t expect[3] = {0, 0, 0};
-        const std::vector<int> perm = cam.permutation(k, seed);
         PathStats stats;
-        for (int s = 0; s < cam.samples_per_pixel(); ++s) {
-            Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
-            Vec3 org, dir;
-            cam.sample(k, s, perm, rng, org, dir);
+        for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& org, const Vec3& dir) {
             const PathResult p = t.sample_path(org, dir, rng, stats);
             if (p.defect >= 0) ++expect[p.defect];
-        }
+        });
         for (int d = 0; d < 3; ++d) {
             EXPECT_EQ(counts[static_cast<size_t>(k * 3 + d)], expect[d]) << "pixel " << k << " defect " << d;
             seen += expect[d];
@@ -167,13 +156,13 @@ TEST(Render, RefinedMeshAndAnalyticPrimitivesGiveTheSamePaths) {
     analytic.representation = Representation::Analytic;
     const RenderResult a = render(Tracer(b.scene, b.solid, refined), {});
     const RenderResult c = render(Tracer(b.scene, b.solid, analytic), {});
-    EXPECT_TRUE(identical(a.T, c.T));
+    EXPECT_TRUE(bit_identical(a.T, c.T));
     EXPECT_EQ(a.stats.leaks_unresolved, 0u);
     // The mesh-only representation approximates: same size of problem, different values.
     TracerOptions mesh;
     mesh.representation = Representation::MeshOnly;
     const RenderResult m = render(Tracer(b.scene, b.solid, mesh), {});
-    EXPECT_FALSE(identical(a.T, m.T));
+    EXPECT_FALSE(bit_identical(a.T, m.T));
     EXPECT_EQ(m.T.rows, a.T.rows);
 }
 
@@ -271,7 +260,7 @@ TEST(Render, CorefinedBubbleWallsRefinedFromTheMeshEqualTheAnalyticBubblesBitFor
     const Tracer tr(cut.scene, cut.solid, refined), ta(plain.scene, plain.solid, analytic);
     const RenderResult a = render(tr, {});
     const RenderResult c = render(ta, {});
-    EXPECT_TRUE(identical(a.T, c.T));
+    EXPECT_TRUE(bit_identical(a.T, c.T));
     EXPECT_EQ(a.stats.leaks_unresolved, 0u);
     EXPECT_GT(a.stats.transmissions, c.stats.transmissions / 2);  // the same paths were traced
     EXPECT_EQ(a.stats.transmissions, c.stats.transmissions);

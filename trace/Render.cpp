@@ -109,35 +109,47 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         PathStats& stats = block_stats[static_cast<size_t>(b)];
         std::vector<Entry> entries;
         entries.reserve(static_cast<size_t>(spp));
+        // The branches of one camera sample (one with the sample estimator); reused, so after the
+        // first samples no allocation happens per sample.
+        std::vector<PathResult> branches;
         for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
             const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
-            const std::vector<int> perm = cam.permutation(k, seed);
             const size_t first_count = opt.track_defects ? block_defects[static_cast<size_t>(b)].size() : 0;
             entries.clear();
             double sum = 0, sum2 = 0;
-            for (int s = 0; s < spp; ++s) {
-                Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
-                Vec3 o, d;
-                cam.sample(k, s, perm, rng, o, d);
-                const PathResult r = tracer.sample_path(o, d, rng, stats);
-                if (opt.track_defects && r.defect >= 0) {
-                    auto& list = block_defects[static_cast<size_t>(b)];
-                    auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
-                                           [&](const DefectPaths& e) { return e.defect == r.defect; });
-                    if (it == list.end())
-                        list.push_back({static_cast<std::int32_t>(k), r.defect, 1});
+            for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& o, const Vec3& d) {
+                branches.clear();
+                tracer.sample_paths(o, d, rng, stats, branches);
+                // The sample's value for the pattern: the sum of its branches' contributions.
+                double f = 0;
+                bool on_display = false;
+                for (size_t i = 0; i < branches.size(); ++i) {
+                    const PathResult& r = branches[i];
+                    // A sample met defect j first when one of its branches did; it counts once per
+                    // defect, so the counts stay numbers of samples (study/GroundTruth.h).
+                    const auto earlier = branches.begin() + static_cast<long>(i);
+                    if (opt.track_defects && r.defect >= 0 &&
+                        std::none_of(branches.begin(), earlier, [&](const PathResult& e) { return e.defect == r.defect; })) {
+                        auto& list = block_defects[static_cast<size_t>(b)];
+                        auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
+                                               [&](const DefectPaths& e) { return e.defect == r.defect; });
+                        if (it == list.end())
+                            list.push_back({static_cast<std::int32_t>(k), r.defect, 1});
+                        else
+                            ++it->paths;
+                    }
+                    if (r.pixel < 0) continue;
+                    on_display = true;
+                    if (pattern)
+                        f += r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
                     else
-                        ++it->paths;
+                        entries.push_back({static_cast<std::int32_t>(r.pixel), r.weight});
                 }
-                if (r.pixel < 0) continue;
-                if (pattern) {
-                    const double f = r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
+                if (pattern && on_display) {
                     sum += f;
                     sum2 += f * f;
-                } else {
-                    entries.push_back({static_cast<std::int32_t>(r.pixel), r.weight});
                 }
-            }
+            });
             if (opt.track_defects) {
                 auto& list = block_defects[static_cast<size_t>(b)];
                 std::sort(list.begin() + static_cast<long>(first_count), list.end(),

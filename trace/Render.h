@@ -3,11 +3,14 @@
 // directly) by Monte Carlo path tracing.
 //
 // T[k, l] = (1 / S) sum over the S samples of pixel k of the weight of those paths that land on
-// display pixel l: the expected fraction of the pixel's ray-of-sight throughput reaching l.
-// Sample s of pixel k draws all its random numbers from the stream Rng(seed, k, s), pixels are
-// processed in fixed blocks and each row sums its samples in sample order, so the result is
-// bit-identical for a given seed whatever the number of threads. Memory grows with the nonzeros:
-// a row holds at most one entry per sample until it is merged.
+// display pixel l: the expected fraction of the pixel's ray-of-sight throughput reaching l. A
+// sample is one path with the sample estimator, or the branches it splits into with the split
+// estimator (scene.tracing; Tracer::sample_paths), each landing where it lands with its weight.
+// Sample s of pixel k draws all its random numbers from the stream Rng(seed, k, s) (all its
+// branches, in their fixed order), pixels are processed in fixed blocks and each row sums its
+// samples in sample order (branches in branch order), so the result is bit-identical for a given
+// seed whatever the number of threads. Memory grows with the nonzeros: a row holds at most one
+// entry per branch until it is merged.
 //
 // Threads: render() keeps no process-wide thread state. With options.threads = n > 0 it runs in a
 // task arena of its own with n threads; with 0 it runs in the caller's arena (all cores when the
@@ -66,5 +69,19 @@ inline std::vector<std::uint32_t> dense_defect_paths(const RenderResult& r, long
 
 // The seed a render with these options uses (scene.seed, or mixed with options.stream).
 std::uint64_t render_seed(const Scene& scene, const RenderOptions& options);
+
+// The camera samples of pixel k exactly as render() draws them with `seed`: for s = 0 .. spp - 1,
+// f(s, rng, origin, direction) with rng = Rng(seed, k, s) just after the camera took the ray from
+// it, where the path's own draws begin (so a caller can trace the render's very paths again).
+template <class F>
+void for_each_camera_sample(const TelecentricCamera& cam, std::uint64_t seed, long k, F&& f) {
+    const std::vector<int> perm = cam.permutation(k, seed);
+    for (int s = 0; s < cam.samples_per_pixel(); ++s) {
+        Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
+        Vec3 o, d;
+        cam.sample(k, s, perm, rng, o, d);
+        f(s, rng, o, d);
+    }
+}
 
 }  // namespace ltm

@@ -1,6 +1,7 @@
 #include "trace/Tracer.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
@@ -50,10 +51,14 @@ void PathStats::merge(const PathStats& o) {
     roulette_kills += o.roulette_kills;
     truncated += o.truncated;
     nan_events += o.nan_events;
+    splits += o.splits;
+    branches += o.branches;
     spurious_candidates += o.spurious_candidates;
     guard_hits += o.guard_hits;
     leak_retries += o.leak_retries;
     leaks_unresolved += o.leaks_unresolved;
+    seam_repairs += o.seam_repairs;
+    edge_chords += o.edge_chords;
     grin_segments += o.grin_segments;
     grin_evaluations += o.grin_evaluations;
     tet_crossings += o.tet_crossings;
@@ -80,6 +85,10 @@ struct Tracer::Hit {
     bool triangle = false;
     double offset = 0;  // how far a spawned ray must start off the surface
     int solved_patch = -1;  // an object patch already solved exactly over (0, t]
+    // The segment's medium, when the tracer's belief was wrong and the geometry repaired it (see
+    // Tracer::repair_medium): the path recorded this medium for the segment, not the belief.
+    bool repaired = false;
+    Medium medium = Medium::Air;
 };
 
 struct Tracer::State {
@@ -95,6 +104,19 @@ struct Tracer::State {
     // object (whose defects all lie inside it) can be met again.
     bool escaped = false;
     int defect = -1;  // PathResult::defect
+    int depth = 0;           // interactions so far (max_depth, rr_depth)
+    int splits_left = 0;     // Fresnel interactions this branch still splits (the split estimator)
+    int random_choices = 0;  // PathResult::random_choices
+};
+
+// The branches of a split camera sample that wait to be traced, depth first. Capacity: a split
+// pushes its reflected branch with one split fewer left than the branch had and the traced
+// branch continues with as many, so from bottom to top the stack holds strictly decreasing
+// numbers of splits left, all at least the traced branch's, all in [0, split_depth - 1]: at most
+// split_depth states, whatever the tree. A fixed array: no allocation per camera sample.
+struct Tracer::SplitStack {
+    std::array<State, kMaxSplitDepth> items;
+    int size = 0;
 };
 
 Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
@@ -104,9 +126,17 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
       lens_(scene.object.lens),
       display_(scene.display),
       camera_(scene.camera, std::min(lens_.z_front(0), lens_.z_front(lens_.aperture_radius())) - 1.0) {
+    // The scene loader admits [0, kMaxSplitDepth] only; a scene built in code is held to it too
+    // (the split stack's capacity), rather than clamped silently.
+    if (scene.tracing.split_depth < 0 || scene.tracing.split_depth > kMaxSplitDepth)
+        throw std::invalid_argument(fmt::format("Tracer: tracing.split_depth must be in [0, {}], got {}", kMaxSplitDepth,
+                                                scene.tracing.split_depth));
     const double a = lens_.aperture_radius();
     scale_ = std::max({a, lens_.spec().center_thickness, std::fabs(scene.display.z)});
     convex_ = lens_.is_convex();
+    // The caps' heights are monotone in rho (sagitta), so their extremes are at the vertex or the edge.
+    object_bounds_ = {{-a, -a, std::min(lens_.z_front(0), lens_.z_front(a))},
+                      {a, a, std::max(lens_.z_back(0), lens_.z_back(a))}};
     object_patches_ = object_patches(lens_);
     for (size_t k = 0; k < scene.defects.size(); ++k)
         if (k < solid.corefined.size() && solid.corefined[k]) {
@@ -263,29 +293,36 @@ bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const Aabb& b)
 
 }  // namespace
 
+double Tracer::bounds_exit(const Vec3& o, const Vec3& d) const {
+    double t0 = 0, t1 = INFINITY;
+    for (int i = 0; i < 3; ++i) {
+        if (d[i] == 0) {
+            if (o[i] < object_bounds_.lo[i] || o[i] > object_bounds_.hi[i]) return 0;
+            continue;
+        }
+        double a = (object_bounds_.lo[i] - o[i]) / d[i], c = (object_bounds_.hi[i] - o[i]) / d[i];
+        if (a > c) std::swap(a, c);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, c);
+    }
+    return t0 <= t1 && std::isfinite(t1) ? t1 : 0;
+}
+
 Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const {
     Hit best;
-    auto removed = [&](const Vec3& x, const Cutter* except) {
-        for (const auto& c : cutters_)
-            if (&c != except && c.shape.contains(x)) return true;
-        return false;
-    };
-    // The object's own patches, unless a cutting defect removed that spot.
+    // The object's own patches, where no cutting defect removed them. The first root on the glass
+    // boundary, not just the first root: a ray leaving a groove through its opening crosses the
+    // face's surface inside the void before it meets the face again where it re-enters the glass.
     for (const Patch& p : object_patches_) {
         if (p.tag == solved_patch) continue;
-        // The first root that a cutter did not remove (not just the first root: a ray leaving a
-        // groove through its opening crosses the face's surface inside the void before it meets
-        // the face again where it re-enters the glass).
         double t = patch_hit(p, o, d, 0.0, best.t < tmax ? best.t : tmax);
-        while (t < INFINITY && removed(o + d * t, nullptr)) t = patch_hit(p, o, d, t, best.t < tmax ? best.t : tmax);
+        while (t < INFINITY && !on_glass_boundary(p.tag, o, d, t)) t = patch_hit(p, o, d, t, best.t < tmax ? best.t : tmax);
         if (t < INFINITY) {
             best.t = t;
             best.tag = p.tag;
         }
     }
-    // The cutters' walls: a root of one of a cutter's surfaces is a crossing of the glass boundary
-    // where the ray enters or leaves the cutter's exact solid (membership changes across the root),
-    // inside the lens and outside every other cutter.
+    // The cutters' walls: a root of one of a cutter's surfaces on the glass boundary.
     for (const auto& c : cutters_) {
         const double limit = best.t < tmax ? best.t : tmax;
         if (!segment_meets_box(o, d, limit, c.shape.bounds())) continue;
@@ -294,11 +331,7 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
             for (int i = 0; i < r.count; ++i) {
                 const double t = r.t[i];
                 if (!(t > 0 && t < (best.t < tmax ? best.t : tmax))) continue;
-                const Vec3 x = o + d * t;
-                const double delta = guard_step(tag, x, d, t);
-                if (c.shape.contains(o + d * (t - delta)) == c.shape.contains(o + d * (t + delta))) continue;
-                if (!lens_.contains(x) && lens_.signed_distance(x) < -lens_slack(tag, x)) continue;
-                if (removed(x, &c)) continue;
+                if (!on_glass_boundary(tag, o, d, t)) continue;
                 best.t = t;
                 best.tag = tag;
             }
@@ -336,17 +369,41 @@ double Tracer::guard_step(int tag, const Vec3& x, const Vec3& d, double t) const
 
 bool Tracer::on_glass_boundary(int tag, const Vec3& o, const Vec3& d, double t) const {
     if (cutters_.empty()) return true;
-    const Vec3 x = o + d * t;
     const int own = tag < static_cast<int>(tag_cutter_.size()) ? tag_cutter_[static_cast<size_t>(tag)] : -1;
     const bool object_patch = tag < static_cast<int>(object_patches_.size());
     if (!object_patch && own < 0) return true;
-    for (size_t i = 0; i < cutters_.size(); ++i)
-        if (static_cast<int>(i) != own && cutters_[i].shape.contains(x)) return false;
-    if (own < 0) return true;
-    const ToolShape& shape = cutters_[static_cast<size_t>(own)].shape;
-    const double delta = guard_step(tag, x, d, t);
-    if (shape.contains(o + d * (t - delta)) == shape.contains(o + d * (t + delta))) return false;
-    return lens_.contains(x) || lens_.signed_distance(x) >= -lens_slack(tag, x);
+    const Vec3 x = o + d * t;
+    double delta = 0;
+    // The surface's own test: an object patch outside every cutter; a cutter's wall where
+    // membership of that cutter changes, within the lens (up to the root's rounding) and outside
+    // the other cutters.
+    bool on = true;
+    for (size_t i = 0; i < cutters_.size() && on; ++i)
+        if (static_cast<int>(i) != own && cutters_[i].shape.contains(x)) on = false;
+    if (on && own >= 0) {
+        const ToolShape& shape = cutters_[static_cast<size_t>(own)].shape;
+        delta = guard_step(tag, x, d, t);
+        on = shape.contains(o + d * (t - delta)) != shape.contains(o + d * (t + delta)) &&
+             (lens_.contains(x) || lens_.signed_distance(x) >= -lens_slack(tag, x));
+    }
+    if (on) return true;
+    // The edge rule. On a seam (where a cutter's wall meets a face, or two cutters meet) every
+    // surface's own test is undecided within rounding, and each may reject its root for the other:
+    // a ray through the seam then crosses the boundary unseen (tests/trace_stress.cpp,
+    // SeamExactRays: 4.5 % of rays within 1e-9 of a seam leaked). Wherever the exact solid's
+    // membership changes across the root, one step either side along the ray, the root is a
+    // crossing whichever surface's test rejected it.
+    if (delta == 0) delta = guard_step(tag, x, d, t);
+    return in_glass(o + d * (t - delta)) != in_glass(o + d * (t + delta));
+}
+
+// Membership of the exact Boolean solid: in the lens and in no cutter (the glass, with every
+// enclosed defect counted as glass: they are crossed at their own surfaces).
+bool Tracer::in_glass(const Vec3& p) const {
+    if (!lens_.contains(p)) return false;
+    for (const auto& c : cutters_)
+        if (c.shape.contains(p)) return false;
+    return true;
 }
 
 Tracer::Hit Tracer::on_surface(Hit h) const {
@@ -367,21 +424,21 @@ Tracer::Hit Tracer::propagate(const State& st, PathStats& stats) const {
     Hit h = straight_hit(st, stats);
     h.d_in = st.d;
     h.length = h.t;
-    h.n_from = m.index;
+    h.n_from = h.repaired && h.found ? index_at(h.medium, h.p) : m.index;
     return h;
 }
 
 Tracer::Hit Tracer::straight_hit(const State& st, PathStats& stats) const {
     if (st.escaped) return {};
     switch (options_.representation) {
-        case Representation::Analytic: return analytic_hit(st);
+        case Representation::Analytic: return analytic_hit(st, stats);
         case Representation::MeshOnly: return mesh_only_hit(st);
         case Representation::Refined: break;
     }
     return refined_hit(st, stats);
 }
 
-Tracer::Hit Tracer::analytic_hit(const State& st) const {
+Tracer::Hit Tracer::analytic_hit(const State& st, PathStats& stats) const {
     const Vec3& o = st.o;
     const Vec3& d = st.d;
     Hit h;
@@ -410,10 +467,10 @@ Tracer::Hit Tracer::analytic_hit(const State& st) const {
         }
     }
     if (h.tag < 0) {
-        // Nothing ahead from inside a closed medium: lost, as in refined_hit.
-        Hit none;
-        none.lost = st.medium != Medium::Air;
-        return none;
+        // Nothing ahead: genuine in air; from inside a closed medium the geometry decides (a ray
+        // spawned across the rim at a cap edge escapes), as in refined_hit.
+        if (st.medium == Medium::Air) return {};
+        return repair_medium(st, {}, stats);
     }
     h.p = o + d * h.t;
     return on_surface(h);
@@ -544,13 +601,57 @@ Tracer::Hit Tracer::refined_hit(const State& st, PathStats& stats) const {
         if (from == st.medium) return h;
         last_inconsistent = h;  // approached from the wrong medium: an earlier surface leaked
     }
+    return repair_medium(st, last_inconsistent, stats);
+}
+
+// No jitter found a crossing approached from the medium the path believes it is in: the ray
+// passed within rounding of an edge of the glass (a seam where a scratch or pit wall meets a face,
+// a cap edge where a face meets the rim), where it took the surface on the wrong side of the edge,
+// spawned across the other surface within its offset, or slipped through the edge unseen. The
+// geometry decides instead of the belief. The segment from o to the next crossing meets no
+// boundary, so its medium is the medium of its midpoint, classified by exact containment on the
+// analytic solid (medium_at):
+//  - the medium the next surface is approached from: the belief was wrong and the segment is in
+//    that medium (`repaired`; PathStats::seam_repairs);
+//  - the believed medium: the belief is right and the hit ends a chord through the edge too short
+//    to resolve (its first crossing is the edge itself): it is crossed from the other side as
+//    found (PathStats::edge_chords);
+//  - with nothing ahead, a ray whose start and whose way out of the object's bounds are both in
+//    the air escapes (repaired to air).
+// What is lost in either case is the refraction at the edge itself: a direction error on rays
+// within rounding of an edge, where two surfaces with different normals meet (tests/
+// trace_stress.cpp, SeamExactRays, counts them). Anything else is an unresolved leak: a found hit
+// is taken as found, and with nothing ahead the path is lost (counted, its weight reported as
+// lost) instead of escaping from inside the glass as if it had left it (tests/trace_stress.cpp
+// found rays along the rim that ended in the glass).
+Tracer::Hit Tracer::repair_medium(const State& st, Hit h, PathStats& stats) const {
+    if (h.found) {
+        const SurfaceInfo& s = solid_.surfaces[h.tag];
+        const Medium from = dot(st.d, h.n_out) < 0 ? s.outside : s.inside;
+        const Medium mid = medium_at(st.o + st.d * (0.5 * h.t));
+        if (mid == from) {
+            ++stats.seam_repairs;
+            h.repaired = true;
+            h.medium = from;
+            return h;
+        }
+        if (mid == st.medium) {
+            ++stats.edge_chords;
+            return h;
+        }
+    } else {
+        const double far = bounds_exit(st.o, st.d);
+        if (medium_at(st.o) == Medium::Air && (far == 0 || medium_at(st.o + st.d * (0.5 * far)) == Medium::Air)) {
+            ++stats.seam_repairs;
+            Hit none;
+            none.repaired = true;
+            none.medium = Medium::Air;
+            return none;
+        }
+        h.lost = true;
+    }
     ++stats.leaks_unresolved;
-    // Nothing ahead at all from inside a closed medium (a ray spawned across an edge of the glass
-    // within its offset, a ray running along the rim): the path has lost its way. It is lost
-    // (counted, its weight reported as lost) instead of escaping from inside the glass as if it
-    // had left it. (Found by tests/trace_stress.cpp: rays along the rim ended in the glass.)
-    if (!last_inconsistent.found) last_inconsistent.lost = true;
-    return last_inconsistent;
+    return h;
 }
 
 // A closed-form graded-index segment (GrinPath.h): the first crossing of every exact surface the
@@ -630,10 +731,39 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
 }
 
 template <bool Principal>
-void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) const {
+void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, SplitStack* split) const {
     const SurfaceTable& table = solid_.surfaces;
     const double alpha = scene_.object.absorption;
-    for (int depth = 0;; ++depth) {
+    // Spawns the ray leaving the interface h along nd (unit; nf the normal on the incident side)
+    // into `s`: false (and counted) if the direction is not finite.
+    const auto spawn = [&](State& s, const Hit& h, const Vec3& nd, const Vec3& nf) {
+        if (!is_finite(nd)) {
+            ++stats.nan_events;
+            return false;
+        }
+        // Spawn clear of the surface on the side the new direction goes to. Stepping along the new
+        // direction by offset / cos clears it by `offset` in normal distance without moving the
+        // ray sideways (an offset along the normal would shift the whole continuing path by up
+        // to the offset); near-tangent directions fall back to the normal offset.
+        const double cos_new = std::fabs(dot(nd, nf));
+        const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
+        s.o = cos_new > trace_tol::kSpawnMinCos ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
+        s.d = nd;
+        s.skip = h.triangle;
+        s.skip_prim = h.prim;
+        // The band in which the facet just left may still lie ahead of the ray: the chord error
+        // over the cosine, plus float rounding.
+        if (h.triangle) {
+            const double e = options_.representation == Representation::MeshOnly
+                                 ? 0.0
+                                 : solid_.tag_chord_error[static_cast<size_t>(h.tag)];
+            s.skip_until = (trace_tol::kSkipChords * e + trace_tol::kSkipFloatUlps * kFloatUlp * scale_) /
+                           std::max(std::fabs(dot(nd, nf)), trace_tol::kCandidateMinCos);
+        }
+        return true;
+    };
+    for (;; ++st.depth) {
+        const int depth = st.depth;
         if (depth >= options_.max_depth) {
             ++stats.truncated;
             stats.lost_weight += st.weight;
@@ -643,6 +773,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
         }
         const Hit h = propagate(st, stats);
         ++stats.segments;
+        if (h.repaired) st.medium = h.medium;  // the geometry's medium for this segment
         if (h.lost) {
             ++stats.lost;
             stats.lost_weight += st.weight;
@@ -680,6 +811,7 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
                 if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(h.p, h.p) < 1.0) to = Medium::inclusion(k);
         const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
         Vec3 nd;
+        bool split_here = false;
         if (!s.optical) {
             // A smooth inhomogeneity's boundary: the index is continuous, so the ray keeps its
             // direction and only changes how it propagates. The part of the boundary outside the
@@ -717,8 +849,31 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
                 if (rec) ++rec->tir;
             } else if (Principal) {
                 reflect_it = false;
+            } else if (split && st.splits_left > 0) {
+                // Splitting. The sampled choice contributes w f_R (reflect, probability R) or w f_T
+                // (transmit, probability T), where f_R and f_T are what the rest of the path
+                // delivers after each branch; its expectation is R w E[f_R] + T w E[f_T]. Following
+                // both, with weights w R and w T, delivers that expectation itself: unbiased, and
+                // the Fresnel choice's variance is gone. The reflected branch waits on the stack
+                // with the splits this one has left; the transmitted one goes on here.
+                --st.splits_left;
+                ++stats.splits;
+                split_here = true;
+                const double w_reflected = st.weight * F.reflectance;
+                if (w_reflected > 0) {
+                    if (split->size >= kMaxSplitDepth)  // impossible by the capacity argument (SplitStack)
+                        throw std::logic_error("Tracer: split stack overflow");
+                    State& r = split->items[static_cast<size_t>(split->size)];
+                    r = st;
+                    r.weight = w_reflected;
+                    r.depth = depth + 1;  // it resumes at the next interaction
+                    if (spawn(r, h, normalize(reflect(d_in, nf)), nf)) ++split->size;
+                }
+                st.weight *= 1.0 - F.reflectance;
+                reflect_it = false;
             } else {
                 reflect_it = rng->uniform() < F.reflectance;
+                ++st.random_choices;
             }
             if (reflect_it) {
                 nd = reflect(d_in, nf);
@@ -728,37 +883,22 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec) cons
                 st.medium = to;
                 st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
                              from == Medium::Glass && to == Medium::Air;
-                ++stats.transmissions;
+                if (!split_here) ++stats.transmissions;  // a split counts as one split
                 if (rec) rec->transmission *= 1.0 - F.reflectance;
             }
             nd = normalize(nd);
         }
-        if (!is_finite(nd)) {
-            ++stats.nan_events;
+        if (!spawn(st, h, nd, nf)) {
             if (rec) rec->nan = true;
             st.weight = 0;
             return;
         }
-        // Spawn clear of the surface on the side the new direction goes to. Stepping along the new
-        // direction by offset / cos clears it by `offset` in normal distance without moving the
-        // ray sideways (an offset along the normal would shift the whole continuing path by up
-        // to the offset); near-tangent directions fall back to the normal offset.
-        const double cos_new = std::fabs(dot(nd, nf));
-        const Vec3 side = dot(nd, nf) > 0 ? nf : -nf;
-        st.o = cos_new > trace_tol::kSpawnMinCos ? h.p + nd * (h.offset / cos_new) : h.p + side * h.offset;
-        st.d = nd;
-        st.skip = h.triangle;
-        st.skip_prim = h.prim;
-        // The band in which the facet just left may still lie ahead of the ray: the chord error
-        // over the cosine, plus float rounding.
-        if (h.triangle) {
-            const double e = options_.representation == Representation::MeshOnly
-                                 ? 0.0
-                                 : solid_.tag_chord_error[static_cast<size_t>(h.tag)];
-            st.skip_until = (trace_tol::kSkipChords * e + trace_tol::kSkipFloatUlps * kFloatUlp * scale_) /
-                            std::max(std::fabs(dot(nd, nf)), trace_tol::kCandidateMinCos);
-        }
-        if (!Principal && depth + 1 >= options_.rr_depth) {
+        // Russian roulette: survive with probability q, weight / q, so the expected weight is
+        // unchanged (q (w / q) + (1 - q) 0 = w). A split interaction is exempt: its branches stay
+        // deterministic, which is what makes the low orders exact. Past the split depth a branch
+        // is an ordinary sampled path and meets roulette at the same interactions as one.
+        if (!Principal && !split_here && depth + 1 >= options_.rr_depth) {
+            ++st.random_choices;
             if (rng->uniform() >= options_.rr_survival) {
                 ++stats.roulette_kills;
                 if (rec) rec->roulette = true;
@@ -796,7 +936,7 @@ PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) 
         rec.direction = st.d;
         return rec;
     }
-    run<true>(st, nullptr, stats, &rec);
+    run<true>(st, nullptr, stats, &rec, nullptr);
     rec.media.push_back(st.medium);
     rec.direction = st.d;
     if (!rec.absorbed && !rec.truncated && !rec.nan && !rec.lost && st.medium == Medium::Air && st.d.z > 0) {
@@ -818,8 +958,8 @@ PrincipalPath Tracer::recorded_path(const Vec3& origin, const Vec3& direction, M
     st.o = origin;
     st.d = normalize_any(direction);
     st.medium = medium;
-    if (rng) run<false>(st, rng, stats, &rec);
-    else run<true>(st, nullptr, stats, &rec);
+    if (rng) run<false>(st, rng, stats, &rec, nullptr);
+    else run<true>(st, nullptr, stats, &rec, nullptr);
     rec.media.push_back(st.medium);
     rec.direction = st.d;
     return rec;
@@ -831,9 +971,40 @@ PathResult Tracer::sample_path(const Vec3& origin, const Vec3& direction, Rng& r
     st.o = origin;
     st.d = direction;
     st.medium = Medium::Air;
-    run<false>(st, &rng, stats, nullptr);
+    run<false>(st, &rng, stats, nullptr, nullptr);
+    return branch_result(st, stats);
+}
+
+void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
+                          std::vector<PathResult>& out) const {
+    const TracingDesc& tracing = scene_.tracing;
+    if (tracing.estimator == Estimator::Sample || tracing.split_depth == 0) {
+        out.push_back(sample_path(origin, direction, rng, stats));
+        return;
+    }
+    ++stats.paths;
+    State st;
+    st.o = origin;
+    st.d = direction;
+    st.medium = Medium::Air;
+    st.splits_left = tracing.split_depth;  // <= kMaxSplitDepth (the constructor checks)
+    // Depth first, transmitted branch first: the order in which branches draw from `rng` and are
+    // appended is fixed by the sample alone. After split_depth splits a branch is an ordinary
+    // sampled path (random Fresnel choices, roulette from rr_depth) carrying its weight.
+    SplitStack pending;
+    for (;;) {
+        run<false>(st, &rng, stats, nullptr, &pending);
+        out.push_back(branch_result(st, stats));
+        if (pending.size == 0) return;
+        st = pending.items[static_cast<size_t>(--pending.size)];
+    }
+}
+
+PathResult Tracer::branch_result(const State& st, PathStats& stats) const {
+    ++stats.branches;
     PathResult r;
     r.defect = st.defect;
+    r.random_choices = st.random_choices;
     if (st.weight == 0) return r;
     if (st.d.z <= 0) {
         ++stats.toward_camera;

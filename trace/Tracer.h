@@ -59,7 +59,15 @@ struct PathStats {
     std::uint64_t paths = 0, segments = 0, reflections = 0, transmissions = 0, tir = 0;
     std::uint64_t absorbed_particle = 0, absorbed_rim = 0, on_display = 0, off_display = 0, toward_camera = 0;
     std::uint64_t roulette_kills = 0, truncated = 0, nan_events = 0;
+    // The split estimator (scene.tracing): interactions that followed both Fresnel branches (each
+    // counts once here, not as a reflection and a transmission), and the branches the camera
+    // samples ended in (`paths` counts camera samples; with the sample estimator, branches = paths).
+    std::uint64_t splits = 0, branches = 0;
     std::uint64_t spurious_candidates = 0, guard_hits = 0, leak_retries = 0, leaks_unresolved = 0;
+    // Rays within rounding of an edge of the glass (Tracer::repair_medium): segments whose medium
+    // the geometry repaired, and chords through an edge too short to resolve. The path's media
+    // stay consistent; the refraction at the edge itself is lost.
+    std::uint64_t seam_repairs = 0, edge_chords = 0;
     // Curved paths: segments traced through a graded-index medium, path evaluations of the closed
     // forms, tetrahedra crossed, paths that found no exit (lost), |p|^2 != n^2 beyond
     // TraceTolerance's bound, walks that left their region other than through an exact surface.
@@ -97,6 +105,10 @@ struct PathResult {
     // (rho < 1 on the chord of a segment inside its region). The first one counts: a path a
     // bubble scatters carries the bubble's signal wherever it goes next.
     int defect = -1;
+    // Random decisions on this branch (Fresnel choices and roulette draws; total internal
+    // reflection is no decision): a branch with none is deterministic given the camera sample's
+    // origin and direction, its weight an exact product of Fresnel factors.
+    int random_choices = 0;
 };
 
 class Tracer {
@@ -112,6 +124,13 @@ public:
     PrincipalPath principal_path(const Vec3& origin, const Vec3& direction) const;
     // One Monte Carlo path with Fresnel reflection or transmission chosen with probability R.
     PathResult sample_path(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats) const;
+    // One camera sample by the scene's estimator (scene.tracing, scene/Scene.h): appends the result
+    // of each branch it ended in to `out` (which it does not clear), in a fixed depth-first order
+    // (transmitted branch first). Sample: one branch, exactly sample_path's. Split: up to
+    // 2^split_depth branches whose weights sum, in expectation, to what one sampled path carries.
+    // Every branch draws from `rng` in that order, so the results depend on the stream alone.
+    void sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
+                      std::vector<PathResult>& out) const;
     // A read-only hook for tests that judge paths independently (tests/trace_stress.cpp): one path
     // from `origin`, which the caller says lies in `medium` (the tracer does not look it up), with
     // every vertex, tag and segment medium recorded. With `rng` the interactions are chosen as in
@@ -145,15 +164,22 @@ private:
     Hit propagate(const State& st, PathStats& stats) const;
     // Straight segments, by representation.
     Hit straight_hit(const State& st, PathStats& stats) const;
-    Hit analytic_hit(const State& st) const;
+    Hit analytic_hit(const State& st, PathStats& stats) const;
     Hit refined_hit(const State& st, PathStats& stats) const;
     Hit mesh_only_hit(const State& st) const;
     // Curved segments.
     Hit grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
     Hit walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
     Hit on_surface(Hit h) const;  // the normal and spawn offset of an exact hit at h.p
+    // The pending branches of a split camera sample (defined in Tracer.cpp).
+    struct SplitStack;
+    // One path (one branch) from st until it ends. With `split` (sampled paths only), a Fresnel
+    // interaction while st.splits_left > 0 pushes the reflected branch onto it and continues
+    // with the transmitted one.
     template <bool Principal>
-    void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record) const;
+    void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split) const;
+    // Where an ended branch lands on the display (weight 0 or off the display: pixel -1).
+    PathResult branch_result(const State& st, PathStats& stats) const;
     // The index of medium m at point x (a field's local value).
     double index_at(Medium m, const Vec3& x) const;
 
@@ -192,10 +218,19 @@ private:
     Hit exact_guard(const Vec3& o, const Vec3& d, double tmax, int solved_patch) const;
     // Whether the root at t of surface `tag` along o + t d lies on the glass boundary of the exact
     // Boolean solid: for an object patch, outside every cutter; for a cutter's wall, where
-    // membership of that cutter changes, within the lens and outside the other cutters (the
-    // guard's own test). Surfaces of no cutter (enclosed ellipsoids, particles) always pass.
+    // membership of that cutter changes, within the lens and outside the other cutters; and, on
+    // a seam where those tests are undecided, wherever membership of the exact solid changes
+    // across the root (the edge rule). Surfaces of no cutter (enclosed ellipsoids, particles)
+    // always pass.
     bool on_glass_boundary(int tag, const Vec3& o, const Vec3& d, double t) const;
     double lens_slack(int tag, const Vec3& x) const;
+    bool in_glass(const Vec3& p) const;  // in the lens and outside every cutter
+    // A segment's medium from the geometry where the belief proved wrong (an edge crossed within
+    // rounding); the definition is at its use in Tracer.cpp.
+    Hit repair_medium(const State& st, Hit h, PathStats& stats) const;
+    // Where o + t d leaves the object's bounding box (t > 0), or 0 if it does not meet it.
+    double bounds_exit(const Vec3& o, const Vec3& d) const;
+    Aabb object_bounds_;
     double guard_step(int tag, const Vec3& x, const Vec3& d, double t) const;
     std::vector<int> tag_cutter_;  // per surface tag: its cutter's index in cutters_, or -1
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)

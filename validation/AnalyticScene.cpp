@@ -507,29 +507,57 @@ double AnalyticScene::expected_display_throughput(const Vec3& origin, const Vec3
     // and the transmitted one with 1 - R (TIR: reflected with probability 1); an absorber ends
     // the path. The probability that the path ends on the display is therefore the sum, over all
     // leaves of this binary tree that leave the object toward the display, of the product of the
-    // branch probabilities along the way. The tree is walked depth-first with an explicit stack.
-    // A branch whose weight is below `cutoff`, or that would need more than max_depth
-    // interactions, is not followed: its weight is added to `dropped` (an upper bound of its
-    // contribution), so the exact value lies in [value, value + dropped]. Light trapped by total
-    // internal reflection (skew rays circling between the faces and a polished rim can be trapped
-    // for ever) ends up there too, after max_depth interactions.
+    // branch probabilities along the way (walk_fresnel_tree).
     if (medium_at(origin).kind != MediumKind::Air)
         throw std::invalid_argument("expected_display_throughput: the origin is not in air");
-    struct Branch {
-        Vec3 o, d;
-        Medium m;
-        int last;
-        int depth;
-        double w;
+    double dropped = 0.0;
+    const double value = walk_fresnel_tree({origin, normalize(direction), Medium{}, -1, 0, 1.0, 0}, max_depth, cutoff,
+                                           dropped, nullptr);
+    if (dropped_weight) *dropped_weight = dropped;
+    return value;
+}
+
+AnalyticScene::SplitMoments AnalyticScene::split_sample_moments(const Vec3& origin, const Vec3& direction,
+                                                                int split_depth, int max_depth, double cutoff) const {
+    if (medium_at(origin).kind != MediumKind::Air)
+        throw std::invalid_argument("split_sample_moments: the origin is not in air");
+    SplitMoments out;
+    // A root of weight w brings w with probability tau (its own tree, walked from weight 1) and 0
+    // otherwise: mean w tau, variance w^2 tau (1 - tau). Its dropped weight scales by w.
+    const std::function<void(const Branch&)> root = [&](const Branch& b) {
+        double dropped = 0.0;
+        Branch unit = b;
+        unit.w = 1.0;
+        const double tau = walk_fresnel_tree(unit, max_depth, cutoff, dropped, nullptr);
+        out.mean += b.w * tau;
+        out.variance += b.w * b.w * tau * (1.0 - tau);
+        out.dropped += b.w * dropped;
     };
+    // Leaves reached before any root are deterministic: they add to the mean, not the variance.
+    out.mean += walk_fresnel_tree({origin, normalize(direction), Medium{}, -1, 0, 1.0, split_depth}, max_depth,
+                                  cutoff, out.dropped, &root);
+    return out;
+}
+
+double AnalyticScene::walk_fresnel_tree(const Branch& start, int max_depth, double cutoff, double& dropped,
+                                        const std::function<void(const Branch&)>* root) const {
+    // Depth first with an explicit stack. A branch whose weight is below `cutoff`, or that would
+    // need more than max_depth interactions, is not followed: its weight is added to `dropped`
+    // (an upper bound of its contribution), so the exact value lies in [value, value + dropped].
+    // Light trapped by total internal reflection (skew rays circling between the faces and a
+    // polished rim can be trapped for ever) ends up there too, after max_depth interactions.
     constexpr long kMaxBranches = 20'000'000;  // a hard budget; never reached by the scenes here
-    std::vector<Branch> stack{{origin, normalize(direction), Medium{}, -1, 0, 1.0}};
-    double value = 0.0, dropped = 0.0;
+    std::vector<Branch> stack{start};
+    double value = 0.0;
     long visited = 0;
     const DisplayDesc& disp = scene_.display;
     while (!stack.empty()) {
         const Branch b = stack.back();
         stack.pop_back();
+        if (root && b.splits == 0) {
+            (*root)(b);
+            continue;
+        }
         if (++visited > kMaxBranches) {
             dropped += b.w;
             continue;
@@ -554,20 +582,19 @@ double AnalyticScene::expected_display_throughput(const Vec3& origin, const Vec3
         if (s.particle || (s.kind == Kind::Rim && absorbing_rim_)) continue;  // absorbed
         const Medium other = across(h.surface, b.m);
         const Interaction in = interact(b.d, h.normal, index_of(b.m, n_glass_), index_of(other, n_glass_));
-        auto push = [&](const Vec3& d, const Medium& m, double w) {
+        auto push = [&](const Vec3& d, const Medium& m, double w, int splits) {
             if (w < cutoff)
                 dropped += w;
             else
-                stack.push_back({h.point, d, m, h.surface, b.depth + 1, w});
+                stack.push_back({h.point, d, m, h.surface, b.depth + 1, w, splits});
         };
         if (in.tir) {
-            push(in.reflected, b.m, b.w);
+            push(in.reflected, b.m, b.w, b.splits);  // no choice, no split
         } else {
-            push(in.reflected, b.m, b.w * in.R);
-            push(in.direction, other, b.w * (1.0 - in.R));
+            push(in.reflected, b.m, b.w * in.R, b.splits - 1);
+            push(in.direction, other, b.w * (1.0 - in.R), b.splits - 1);
         }
     }
-    if (dropped_weight) *dropped_weight = dropped;
     return value;
 }
 

@@ -20,6 +20,7 @@
 // rotated ellipsoids (both are quadrics, intersected exactly), pairwise disjoint. Surface-breaking
 // bubbles (pits) and scratches are not modelled: their surfaces (trimmed spheres, cones, tori) are
 // exactly what the tracer's Boolean machinery produces and would have to be re-implemented here.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -172,6 +173,23 @@ public:
                                        int max_depth = 64, double cutoff = 1e-14,
                                        double* dropped_weight = nullptr) const;
 
+    // The moments of one camera sample's value X (the total weight its branches bring to the
+    // display) under the split estimator (scene/Scene.h, Estimator::Split) with `split_depth`,
+    // for a ray from `origin` in air. The first split_depth Fresnel interactions of every branch
+    // (TIR is none) are followed both ways with weights R and 1 - R; a branch with no split left
+    // (a "root", weight w) goes on as a sampled path: it reaches the display with probability
+    // tau_r (its whole Fresnel tree, as expected_display_throughput) and then brings w, else 0.
+    // Roots draw independent random numbers, so
+    //   E[X] = sum_r w_r tau_r + (deterministic leaves on the display),
+    //   Var[X] = sum_r w_r^2 tau_r (1 - tau_r).
+    // split_depth = 0: the one root is the ray itself, E = tau, Var = tau (1 - tau) (the sample
+    // estimator with weight 1). `dropped` as for expected_display_throughput.
+    struct SplitMoments {
+        double mean = 0, variance = 0, dropped = 0;
+    };
+    SplitMoments split_sample_moments(const Vec3& origin, const Vec3& direction, int split_depth,
+                                      int max_depth = 64, double cutoff = 1e-14) const;
+
     // Finite-difference sensitivity of the path (ValidationTolerance.h documents the method).
     RaySensitivity sensitivity(const Vec3& origin, const Vec3& direction) const;
 
@@ -198,6 +216,22 @@ private:
     bool on_patch(const Surf& s, const Vec3& p) const;
     Vec3 normal_at(const Surf& s, const Vec3& p) const;
     void finish_display(Path& path, const Vec3& o) const;
+
+    // A branch of the Fresnel tree: where it starts, in which medium, after which surface, after
+    // how many interactions, with which weight, and how many of its interactions are still split.
+    struct Branch {
+        Vec3 o, d;
+        Medium m;
+        int last;
+        int depth;
+        double w;
+        int splits;
+    };
+    // Walks the tree below `start` depth first and returns the weight that ends on the display.
+    // With `root`, a branch with no split left is handed to it instead of being walked; without,
+    // `splits` is ignored and every branch is walked. Dropped weight is added to `dropped`.
+    double walk_fresnel_tree(const Branch& start, int max_depth, double cutoff, double& dropped,
+                             const std::function<void(const Branch&)>* root) const;
 
     Scene scene_;
     double n_glass_ = 1.5, a_ = 1, t_ = 1, r1_ = 0, r2_ = 0;
