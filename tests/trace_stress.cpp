@@ -643,6 +643,28 @@ bool selected(const std::string& name) {
 
 }  // namespace
 
+// Rays from gen(bench, rng) over every selected bench and each representation it allows, rays_of(i)
+// rays for bench i split evenly over its representations, with seed base + i; one row per bench
+// and representation.
+template <class Gen, class Count>
+std::map<std::string, Row> run_benches(const std::vector<std::unique_ptr<Bench>>& benches, std::uint64_t base,
+                                       Count rays_of, Gen gen) {
+    std::map<std::string, Row> rows;
+    for (size_t i = 0; i < benches.size(); ++i) {
+        const Bench& b = *benches[i];
+        if (!selected(b.name())) continue;
+        for (size_t rep = 0; rep < b.representations(); ++rep) {
+            const auto ts = std::chrono::steady_clock::now();
+            const long nr = rays_of(i) / static_cast<long>(b.representations());
+            const Tally t = b.run(nr, rep, base + i, [&](Rng& r) { return gen(b, r); });
+            Row& row = rows[b.name() + " / " + to_string(b.tracer(rep).representation())];
+            row.t.merge(t);
+            row.seconds += seconds_since(ts);
+        }
+    }
+    return rows;
+}
+
 // 80 % of the budget: random rays over every scene class, split by the scenes' weights and, where
 // the analytic representation applies, half of them to it.
 TEST(StressLeaks, RandomRays) {
@@ -653,21 +675,10 @@ TEST(StressLeaks, RandomRays) {
     double wsum = 0;
     for (const auto& c : cases) wsum += c.weight;
     const long n = total_budget() * 8 / 10;
-    std::map<std::string, Row> rows;
     const auto t1 = std::chrono::steady_clock::now();
-    for (size_t i = 0; i < benches.size(); ++i) {
-        const Bench& b = *benches[i];
-        if (!selected(b.name())) continue;
-        const long ni = static_cast<long>(n * cases[i].weight / wsum);
-        for (size_t rep = 0; rep < b.representations(); ++rep) {
-            const auto ts = std::chrono::steady_clock::now();
-            const long nr = ni / static_cast<long>(b.representations());
-            const Tally t = b.run(nr, rep, 100 + i, [&](Rng& r) { return b.random_ray(r); });
-            Row& row = rows[b.name() + " / " + to_string(b.tracer(rep).representation())];
-            row.t.merge(t);
-            row.seconds += seconds_since(ts);
-        }
-    }
+    const auto rows = run_benches(
+        benches, 100, [&](size_t i) { return static_cast<long>(n * cases[i].weight / wsum); },
+        [](const Bench& b, Rng& r) { return b.random_ray(r); });
     std::printf("scenes built in %.1f s\n", build_s);
     print_table("random rays", rows, seconds_since(t1));
     ::testing::Test::RecordProperty("rays", std::to_string(n));
@@ -678,20 +689,10 @@ TEST(StressLeaks, RandomRays) {
 TEST(StressLeaks, AdversarialRays) {
     const auto benches = build_benches();
     const long n = total_budget() * 12 / 100;
-    std::map<std::string, Row> rows;
     const auto t1 = std::chrono::steady_clock::now();
-    for (size_t i = 0; i < benches.size(); ++i) {
-        const Bench& b = *benches[i];
-        if (!selected(b.name())) continue;
-        for (size_t rep = 0; rep < b.representations(); ++rep) {
-            const auto ts = std::chrono::steady_clock::now();
-            const long nr = n / static_cast<long>(benches.size() * b.representations());
-            const Tally t = b.run(nr, rep, 200 + i, [&](Rng& r) { return b.adversarial_ray(r); });
-            Row& row = rows[b.name() + " / " + to_string(b.tracer(rep).representation())];
-            row.t.merge(t);
-            row.seconds += seconds_since(ts);
-        }
-    }
+    const long per_bench = n / static_cast<long>(benches.size());
+    const auto rows = run_benches(benches, 200, [&](size_t) { return per_bench; },
+                                  [](const Bench& b, Rng& r) { return b.adversarial_ray(r); });
     print_table("adversarial rays", rows, seconds_since(t1));
     expect_clean(rows);
 }
@@ -707,22 +708,11 @@ TEST(StressLeaks, AdversarialRays) {
 TEST(StressLeaks, SeamExactRays) {
     const auto benches = build_benches();
     const long n = total_budget() * 12 / 1000;
-    std::map<std::string, Row> rows;
     const auto t1 = std::chrono::steady_clock::now();
-    for (size_t i = 0; i < benches.size(); ++i) {
-        const Bench& b = *benches[i];
-        if (!selected(b.name())) continue;
-        for (size_t rep = 0; rep < b.representations(); ++rep) {
-            const auto ts = std::chrono::steady_clock::now();
-            const long nr = n / static_cast<long>(benches.size() * b.representations());
-            const Tally t = b.run(nr, rep, 500 + i, [&](Rng& r) {
-                return b.has_seams() && r.uniform() < 0.7 ? b.seam_ray(r, true) : b.edge_ray(r, true);
-            });
-            Row& row = rows[b.name() + " / " + to_string(b.tracer(rep).representation())];
-            row.t.merge(t);
-            row.seconds += seconds_since(ts);
-        }
-    }
+    const long per_bench = n / static_cast<long>(benches.size());
+    const auto rows = run_benches(benches, 500, [&](size_t) { return per_bench; }, [](const Bench& b, Rng& r) {
+        return b.has_seams() && r.uniform() < 0.7 ? b.seam_ray(r, true) : b.edge_ray(r, true);
+    });
     print_table("rays exactly through seams and cap edges", rows, seconds_since(t1));
     expect_clean(rows);
 }
