@@ -752,3 +752,15 @@ namespace ltm::tol {
 constexpr int kBruteForceFalseEntries400Rows = 14;
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// io_peak_rss: how far a stretch's measured RSS growth can lie from the pages it writes itself.
+// Above: the allocator's arena growth, page tables (8 bytes per 4 KiB page: 16 KiB for 8 MiB),
+// gtest's bookkeeping and /proc reads. Below: Linux counts RSS in per-CPU batches, so VmRSS and
+// VmHWM lag the true count by up to a batch per CPU (measured here: 88 KiB short of 64 MiB
+// written). A few MiB at most either way; 16 MiB bounds it with margin while staying far below
+// the 64 MiB a stale, process-wide peak would add.
+constexpr double kRssNoiseBytes = 16.0 * 1024 * 1024;
+
+}  // namespace ltm::tol
