@@ -14,6 +14,7 @@
 #include <limits>
 #include <memory>
 #include <new>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -26,23 +27,161 @@ namespace ltm {
 // Writing: the five arrays of scipy.sparse.save_npz, through io/Npz.h
 // ---------------------------------------------------------------------------------------------
 
-void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options) {
-    const std::string invalid = T.check();
-    if (!invalid.empty()) throw std::runtime_error("cannot write LTM file '" + path + "': the matrix is invalid: " + invalid);
+namespace {
+
+// The five arrays of write_ltm_npz, in scipy's order, with indices and data as given (viewed from
+// memory or filled from spill files): the one place that says what an ltm.npz holds, so the
+// in-memory and the streamed file cannot differ.
+void write_csr_arrays(const std::string& path, std::int64_t rows, std::int64_t cols, std::size_t nnz,
+                      const std::vector<std::int64_t>& indptr, io::NpyArray indices, io::NpyArray data,
+                      const NpzWriteOptions& options) {
     try {
         // scipy's rule: int32 indptr unless nnz needs int64 (converted while writing, no copy).
         static const std::string csr = "csr";
-        const std::vector<std::int64_t> shape = {T.rows, T.cols};
+        const std::vector<std::int64_t> shape = {rows, cols};
         io::write_npz(path,
-                      {io::npy_array("indices", T.indices),
-                       T.nnz() < (std::size_t(1) << 31) ? io::npy_converted<std::int32_t>("indptr", T.indptr)
-                                                        : io::npy_array("indptr", T.indptr),
-                       io::npy_bytes_scalar("format", csr), io::npy_array("shape", shape),
-                       io::npy_array("data", T.data)},
+                      {std::move(indices),
+                       nnz < (std::size_t(1) << 31) ? io::npy_converted<std::int32_t>("indptr", indptr)
+                                                    : io::npy_array("indptr", indptr),
+                       io::npy_bytes_scalar("format", csr), io::npy_array("shape", shape), std::move(data)},
                       options, "LTM file");
     } catch (const std::bad_alloc&) {
         throw std::runtime_error("cannot write LTM file '" + path + "': out of memory");
     }
+}
+
+}  // namespace
+
+void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options) {
+    const std::string invalid = T.check();
+    if (!invalid.empty()) throw std::runtime_error("cannot write LTM file '" + path + "': the matrix is invalid: " + invalid);
+    write_csr_arrays(path, T.rows, T.cols, T.nnz(), T.indptr, io::npy_array("indices", T.indices),
+                     io::npy_array("data", T.data), options);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Streaming: spill files beside the target, read back while libzip pulls the entries
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+// An unnamed file in `folder` (see LtmFileStream); -1 with errno set on failure.
+int open_spill_file(const std::string& folder, const std::string& name) {
+    int fd = ::open(folder.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
+    if (fd >= 0) return fd;
+    if (errno != EOPNOTSUPP && errno != EISDIR && errno != EINVAL) return -1;
+    // No O_TMPFILE here: a named file, unlinked as soon as it exists.
+    std::random_device rd;
+    for (int attempt = 0; attempt < 16; ++attempt) {
+        char hex[17];
+        std::snprintf(hex, sizeof hex, "%08x%08x", rd(), rd());
+        const std::string p = folder + "/." + name + ".spill-" + hex;
+        fd = ::open(p.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        if (fd >= 0) {
+            ::unlink(p.c_str());
+            return fd;
+        }
+        if (errno != EEXIST) return -1;
+    }
+    return -1;
+}
+
+void write_all(int fd, const void* bytes, std::size_t n, std::uint64_t at) {
+    const auto* p = static_cast<const unsigned char*>(bytes);
+    while (n > 0) {
+        const ssize_t w = ::pwrite(fd, p, n, static_cast<off_t>(at));
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            throw std::runtime_error(std::string("writing a spill file failed: ") + std::strerror(errno));
+        }
+        p += w;
+        at += static_cast<std::uint64_t>(w);
+        n -= static_cast<std::size_t>(w);
+    }
+}
+
+// A 1-D array of `count` 4-byte little-endian elements (the host's order on the little-endian
+// machines ltmsim runs on; checked below) read from a spill file as libzip pulls it.
+io::NpyArray spilled_array(const std::string& name, const char* descr, int fd, std::size_t count) {
+    io::NpyArray a{name, descr, {static_cast<std::uint64_t>(count)}, nullptr, count * 4, {}};
+    a.fill = [fd, total = count * 4](std::uint64_t offset, void* out, std::size_t n) -> std::size_t {
+        if (offset >= total) return 0;
+        n = static_cast<std::size_t>(std::min<std::uint64_t>(n, total - offset));
+        auto* o = static_cast<unsigned char*>(out);
+        std::size_t done = 0;
+        while (done < n) {
+            const ssize_t r = ::pread(fd, o + done, n - done, static_cast<off_t>(offset + done));
+            if (r < 0 && errno == EINTR) continue;
+            if (r < 0) throw std::runtime_error(std::string("reading its spill file failed: ") + std::strerror(errno));
+            if (r == 0) throw std::runtime_error("its spill file ended early");
+            done += static_cast<std::size_t>(r);
+        }
+        return n;
+    };
+    return a;
+}
+
+}  // namespace
+
+LtmFileStream::LtmFileStream(const std::string& path, std::int64_t rows, std::int64_t cols, const NpzWriteOptions& options)
+    : path_(path), rows_(rows), cols_(cols), options_(options) {
+    static_assert(sizeof(float) == 4 && sizeof(std::int32_t) == 4, "4-byte indices and values");
+    if (!io::detail::kHostLittle) fail("streaming needs a little-endian host (the spill files hold the host's bytes)");
+    if (rows < 0 || cols < 0) fail("negative shape");
+    const std::size_t slash = path.find_last_of('/');
+    const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+    const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+    indices_fd_ = open_spill_file(folder, name);
+    if (indices_fd_ < 0) fail("cannot create a spill file in folder '" + folder + "': " + std::strerror(errno));
+    data_fd_ = open_spill_file(folder, name);
+    if (data_fd_ < 0) {
+        const int e = errno;
+        ::close(indices_fd_);
+        indices_fd_ = -1;
+        fail("cannot create a spill file in folder '" + folder + "': " + std::strerror(e));
+    }
+    indptr_.reserve(static_cast<std::size_t>(rows) + 1);
+}
+
+LtmFileStream::~LtmFileStream() {
+    if (indices_fd_ >= 0) ::close(indices_fd_);
+    if (data_fd_ >= 0) ::close(data_fd_);
+}
+
+void LtmFileStream::fail(const std::string& why) const {
+    throw std::runtime_error("cannot write LTM file '" + path_ + "': " + why);
+}
+
+void LtmFileStream::append(const CsrMatrix& block) {
+    if (indices_fd_ < 0) fail("the stream is already committed");
+    if (block.cols != cols_)
+        fail("a block of " + std::to_string(block.cols) + " columns for a matrix of " + std::to_string(cols_));
+    if (rows_written() + block.rows > rows_)
+        fail("rows " + std::to_string(rows_written()) + " + " + std::to_string(block.rows) + " exceed the matrix's " +
+             std::to_string(rows_));
+    const std::string invalid = block.check();
+    if (!invalid.empty()) fail("the block at row " + std::to_string(rows_written()) + " is invalid: " + invalid);
+    const std::uint64_t at = static_cast<std::uint64_t>(nnz()) * 4;
+    try {
+        write_all(indices_fd_, block.indices.data(), block.indices.size() * 4, at);
+        write_all(data_fd_, block.data.data(), block.data.size() * 4, at);
+    } catch (const std::runtime_error& e) {
+        fail(e.what());
+    }
+    const std::int64_t base = indptr_.back();
+    for (std::int64_t r = 1; r <= block.rows; ++r) indptr_.push_back(base + block.indptr[static_cast<std::size_t>(r)]);
+}
+
+void LtmFileStream::commit() {
+    if (indices_fd_ < 0) fail("the stream is already committed");
+    if (rows_written() != rows_)
+        fail("only " + std::to_string(rows_written()) + " of " + std::to_string(rows_) + " rows were given");
+    const std::size_t n = nnz();
+    write_csr_arrays(path_, rows_, cols_, n, indptr_, spilled_array("indices", "<i4", indices_fd_, n),
+                     spilled_array("data", "<f4", data_fd_, n), options_);
+    ::close(indices_fd_);
+    ::close(data_fd_);
+    indices_fd_ = data_fd_ = -1;
 }
 
 // ---------------------------------------------------------------------------------------------

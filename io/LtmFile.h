@@ -71,6 +71,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "io/Npz.h"
 #include "io/CsrMatrix.h"
@@ -81,6 +82,45 @@ namespace ltm {
 using NpzWriteOptions = io::NpzWriteOptions;
 
 void write_ltm_npz(const std::string& path, const CsrMatrix& T, const NpzWriteOptions& options = {});
+
+// ltm.npz written from T's rows as they come, block by block, for a T larger than memory: the
+// file is byte-identical to write_ltm_npz of the whole matrix (the same arrays, bytes and archive),
+// but only the row offsets (8 bytes per row) stay in memory.
+//
+// How: each block's indices and data are appended to two spill files, which are unnamed files
+// (O_TMPFILE) in the target's folder: they never appear in the folder and vanish when closed or
+// when the process dies, so a failed or killed render leaves nothing behind (where the file system
+// has no O_TMPFILE, a named file ".<name>.spill-<hex>" is created with O_EXCL and unlinked at once,
+// to the same effect). They sit beside the target so that the spilled bytes need the disk the
+// archive needs, not /tmp's. commit() then writes the archive through write_npz, whose array
+// fills read the spill files back as libzip pulls the entries (indices, indptr, format, shape,
+// data: the order of write_ltm_npz), into an AtomicFile: atomic like write_ltm_npz.
+//
+// Errors are std::runtime_error "cannot write LTM file '<path>': ..." (a block of the wrong width,
+// an invalid block, rows beyond `rows`, commit before all rows came, the spill files' I/O).
+class LtmFileStream {
+public:
+    // The folder of `path` must exist; nothing is written to `path` before commit().
+    LtmFileStream(const std::string& path, std::int64_t rows, std::int64_t cols, const NpzWriteOptions& options = {});
+    ~LtmFileStream();
+    LtmFileStream(const LtmFileStream&) = delete;
+    LtmFileStream& operator=(const LtmFileStream&) = delete;
+
+    // Appends the next block.rows rows (block.cols must be cols; the block must be valid).
+    void append(const CsrMatrix& block);
+    std::int64_t rows_written() const { return static_cast<std::int64_t>(indptr_.size()) - 1; }
+    std::size_t nnz() const { return static_cast<std::size_t>(indptr_.back()); }
+    // Writes the archive (all `rows` rows must have been appended) and closes the spill files.
+    void commit();
+
+private:
+    [[noreturn]] void fail(const std::string& why) const;
+    std::string path_;
+    std::int64_t rows_ = 0, cols_ = 0;
+    NpzWriteOptions options_;
+    std::vector<std::int64_t> indptr_{0};
+    int indices_fd_ = -1, data_fd_ = -1;
+};
 CsrMatrix read_ltm_npz(const std::string& path);
 
 }  // namespace ltm

@@ -279,6 +279,114 @@ TEST_F(LtmFileTest, OutputIsDeterministic) {
     EXPECT_EQ(slurp(path("a.npz")), slurp(path("b.npz")));
 }
 
+// ----- streaming (LtmFileStream) -----
+
+namespace {
+
+// Rows [r0, r1) of m as a matrix of their own.
+CsrMatrix row_block(const CsrMatrix& m, std::int64_t r0, std::int64_t r1) {
+    CsrMatrix b;
+    b.rows = r1 - r0;
+    b.cols = m.cols;
+    const auto from = m.indptr[static_cast<size_t>(r0)], to = m.indptr[static_cast<size_t>(r1)];
+    for (std::int64_t r = r0; r <= r1; ++r) b.indptr.push_back(m.indptr[static_cast<size_t>(r)] - from);
+    b.indices.assign(m.indices.begin() + from, m.indices.begin() + to);
+    b.data.assign(m.data.begin() + from, m.data.begin() + to);
+    return b;
+}
+
+}  // namespace
+
+TEST_F(LtmFileTest, StreamedFileIsByteIdenticalToTheWholeMatrixsFile) {
+    const std::vector<std::pair<std::string, CsrMatrix>> cases = {
+        {"small with empty rows", small_matrix()},
+        {"all empty 3x7", CsrMatrix::zeros(3, 7)},
+        {"0x0", CsrMatrix::zeros(0, 0)},
+        {"70000 rows", random_matrix(70000, 300, 6, 42)},
+    };
+    for (int level : {0, 1, 9}) {
+        ltm::NpzWriteOptions o;
+        o.compression_level = level;
+        for (const auto& [name, m] : cases) {
+            ltm::write_ltm_npz(path("whole.npz"), m, o);
+            const std::string whole = slurp(path("whole.npz"));
+            // Blocks of one row, of 7, of uneven random sizes (zero-row blocks among them), all at once.
+            for (int split : {1, 7, -1, 0}) {
+                SCOPED_TRACE(name + ", level " + std::to_string(level) + ", split " + std::to_string(split));
+                ltm::LtmFileStream stream(path("streamed.npz"), m.rows, m.cols, o);
+                std::mt19937 rng(5);
+                std::int64_t r = 0;
+                do {  // at least one block, so a matrix of no rows gets an empty one
+                    const std::int64_t n = split == 0 ? m.rows : split > 0 ? split : static_cast<std::int64_t>(rng() % 50);
+                    const std::int64_t r1 = std::min(m.rows, r + n);
+                    stream.append(row_block(m, r, r1));
+                    r = r1;
+                } while (r < m.rows);
+                EXPECT_EQ(stream.rows_written(), m.rows);
+                EXPECT_EQ(stream.nnz(), m.nnz());
+                // The spill files are unnamed: the folder shows nothing of them, before or after.
+                EXPECT_EQ(listing(), std::vector<std::string>{"whole.npz"});
+                stream.commit();
+                EXPECT_EQ(slurp(path("streamed.npz")), whole);
+                EXPECT_EQ(listing(), (std::vector<std::string>{"streamed.npz", "whole.npz"}));
+                fs::remove(path("streamed.npz"));
+            }
+        }
+    }
+}
+
+TEST_F(LtmFileTest, StreamRefusesBadBlocksAndAnUnfinishedStreamWritesNothing) {
+    const CsrMatrix m = small_matrix();  // 5 x 5
+    const std::string target = path("ltm.npz");
+    {
+        ltm::LtmFileStream stream(target, m.rows, m.cols);
+        std::string msg = message_of([&] { stream.append(CsrMatrix::zeros(2, 4)); });
+        EXPECT_NE(msg.find("cannot write LTM file '" + target + "': a block of 4 columns for a matrix of 5"),
+                  std::string::npos)
+            << msg;
+        CsrMatrix broken = row_block(m, 0, 3);
+        broken.indices[0] = 7;
+        msg = message_of([&] { stream.append(broken); });
+        EXPECT_NE(msg.find("the block at row 0 is invalid"), std::string::npos) << msg;
+        stream.append(row_block(m, 0, 3));
+        msg = message_of([&] { stream.append(row_block(m, 0, 3)); });
+        EXPECT_NE(msg.find("rows 3 + 3 exceed the matrix's 5"), std::string::npos) << msg;
+        msg = message_of([&] { stream.commit(); });
+        EXPECT_NE(msg.find("only 3 of 5 rows were given"), std::string::npos) << msg;
+    }  // destroyed uncommitted
+    EXPECT_TRUE(listing().empty());
+    const std::string nowhere = path("no/such/folder/ltm.npz");
+    const std::string msg = message_of([&] { ltm::LtmFileStream s(nowhere, 1, 1); });
+    EXPECT_NE(msg.find("cannot write LTM file '" + nowhere + "': cannot create a spill file in folder '" +
+                       path("no/such/folder") + "'"),
+              std::string::npos)
+        << msg;
+}
+
+TEST_F(LtmFileTest, AFailedStreamedCommitLeavesTheTargetUntouched) {
+    const std::string target = path("ltm.npz");
+    ltm::write_ltm_npz(target, small_matrix());
+    const std::string before = slurp(target);
+    const CsrMatrix big = random_matrix(20000, 1000, 10, 1);
+    ltm::LtmFileStream stream(target, big.rows, big.cols);
+    stream.append(big);
+    struct sigaction ignore {}, previous {};
+    ignore.sa_handler = SIG_IGN;
+    ::sigaction(SIGXFSZ, &ignore, &previous);
+    rlimit saved{};
+    ::getrlimit(RLIMIT_FSIZE, &saved);
+    rlimit small = saved;
+    small.rlim_cur = 4096;
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+    const std::string msg = message_of([&] { stream.commit(); });
+    ::setrlimit(RLIMIT_FSIZE, &saved);
+    ::sigaction(SIGXFSZ, &previous, nullptr);
+    EXPECT_NE(msg.find("cannot write LTM file '" + target + "'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("File too large"), std::string::npos) << msg;
+    EXPECT_EQ(slurp(target), before);
+    EXPECT_EQ(listing(), std::vector<std::string>{"ltm.npz"});
+}
+
 // ----- scipy interoperability -----
 
 TEST_F(LtmFileTest, ScipyLoadsOurFile) {
