@@ -186,6 +186,87 @@ TEST(Render, RowsHoldOnlyTheirNonzerosAndSumToAtMostOne) {
     EXPECT_LE(r.T.nnz(), static_cast<size_t>(24 * 24 * 36));
 }
 
+namespace {
+
+// Collects the rows a streaming render hands out, checking that they arrive in order.
+struct CollectRows : RowSink {
+    CsrMatrix T;
+    int blocks = 0;
+    void rows(std::int64_t first_row, const CsrMatrix& block) override {
+        EXPECT_EQ(block.check(), "");
+        EXPECT_EQ(first_row, T.rows) << "blocks must arrive in row order, each row once";
+        if (blocks++ == 0) {
+            T.cols = block.cols;
+            T.indptr = {0};
+        }
+        EXPECT_EQ(block.cols, T.cols);
+        const std::int64_t base = T.indptr.back();
+        for (std::int64_t r = 1; r <= block.rows; ++r) T.indptr.push_back(base + block.indptr[static_cast<size_t>(r)]);
+        T.indices.insert(T.indices.end(), block.indices.begin(), block.indices.end());
+        T.data.insert(T.data.end(), block.data.begin(), block.data.end());
+        T.rows += block.rows;
+    }
+};
+
+}  // namespace
+
+TEST(Render, StreamedRowsAreBitForBitTheMatrixOfARenderThatKeepsIt) {
+    // 96 x 96 pixels = 288 blocks of 32: more than one wave of 256 blocks, so a budget of half of
+    // T switches to streaming between waves (what was held goes first, then every wave), a budget
+    // of 1 byte streams from the first wave, and one above T's bytes never streams.
+    std::string yaml = kBubbles;
+    yaml.replace(yaml.find("resolution: [24, 24]"), 20, "resolution: [96, 96]");
+    yaml.replace(yaml.find("samples_per_pixel: 36"), 21, "samples_per_pixel: 4");
+    const Built b = build(yaml);
+    const Tracer t(b.scene, b.solid, {});
+    RenderOptions keep;
+    keep.threads = 1;
+    keep.track_defects = true;
+    const RenderResult whole = render(t, keep);
+    ASSERT_EQ(whole.T.check(), "");
+    EXPECT_FALSE(whole.streamed);
+    EXPECT_EQ(whole.nnz, whole.T.nnz());
+    const std::size_t bytes = 8 * whole.T.nnz() + 8 * (static_cast<size_t>(whole.T.rows) + 1);
+    for (int threads : {1, 2}) {
+        for (std::size_t budget : {std::size_t(1), bytes / 2, bytes + 1}) {
+            SCOPED_TRACE("threads " + std::to_string(threads) + ", budget " + std::to_string(budget) + " of " +
+                         std::to_string(bytes) + " bytes");
+            CollectRows sink;
+            RenderOptions o = keep;
+            o.threads = threads;
+            o.row_sink = &sink;
+            o.max_matrix_bytes = budget;
+            const RenderResult r = render(t, o);
+            EXPECT_EQ(r.nnz, whole.nnz);
+            EXPECT_EQ(r.stats.segments, whole.stats.segments);
+            EXPECT_EQ(r.stats.display_weight, whole.stats.display_weight);
+            ASSERT_EQ(r.defect_paths.size(), whole.defect_paths.size());
+            for (size_t i = 0; i < r.defect_paths.size(); ++i) {
+                EXPECT_EQ(r.defect_paths[i].pixel, whole.defect_paths[i].pixel);
+                EXPECT_EQ(r.defect_paths[i].paths, whole.defect_paths[i].paths);
+            }
+            if (budget > bytes) {
+                EXPECT_FALSE(r.streamed);
+                EXPECT_EQ(sink.blocks, 0);
+                EXPECT_TRUE(bit_identical(r.T, whole.T));
+                continue;
+            }
+            EXPECT_TRUE(r.streamed);
+            EXPECT_EQ(r.T.nnz(), 0u);  // nothing kept
+            EXPECT_GE(sink.blocks, 2);
+            EXPECT_TRUE(bit_identical(sink.T, whole.T));
+        }
+    }
+    // Streaming needs the full T: not with a pattern or a pixel subset.
+    CollectRows sink;
+    RenderOptions bad = keep;
+    bad.row_sink = &sink;
+    bad.max_matrix_bytes = 1;
+    std::vector<long> subset{0, 1};
+    bad.pixels = &subset;
+    EXPECT_THROW(render(t, bad), std::invalid_argument);
+}
+
 TEST(Render, StressScenesProduceNoNaN) {
     // Pits, scratches crossing them, overlapping and touching bubbles, a particle, grazing
     // illumination (NA 0.9), TIR-heavy geometry: every path must stay finite.

@@ -66,6 +66,79 @@ struct Entry {
     double weight;
 };
 
+// What one block of pixels produced: its rows (their lengths, then their entries back to back),
+// its path statistics and its defect counts. Kept per wave and reused, so a wave allocates only
+// while its buffers still grow.
+struct BlockRows {
+    std::vector<std::int32_t> row_nnz;  // per item of the block
+    std::vector<std::int32_t> columns;
+    std::vector<float> values;
+    PathStats stats;
+    std::vector<DefectPaths> defects;
+    void clear() {
+        row_nnz.clear();
+        columns.clear();
+        values.clear();
+        stats = PathStats{};
+        defects.clear();
+    }
+};
+
+// An array that grows in fixed chunks instead of one doubling vector: appending never copies what
+// is there, and a chunk is large enough (2^23 elements, 32 MiB of 4-byte values, at glibc's
+// largest dynamic mmap threshold) that malloc maps it on its own, so freeing it returns its pages
+// to the system at once. Pages are touched only as they are written (reserve, no value
+// initialisation), so a small render's RSS is what it writes, not 32 MiB.
+template <class T>
+class ChunkedArray {
+public:
+    static constexpr std::size_t kChunk = std::size_t(1) << 23;
+    void append(const T* v, std::size_t n) {
+        while (n > 0) {
+            if (chunks_.empty() || chunks_.back().size() == kChunk) {
+                chunks_.emplace_back();
+                chunks_.back().reserve(kChunk);
+            }
+            std::vector<T>& c = chunks_.back();
+            const std::size_t m = std::min(n, kChunk - c.size());
+            c.insert(c.end(), v, v + m);
+            v += m;
+            n -= m;
+            size_ += m;
+        }
+    }
+    std::size_t size() const { return size_; }
+    // Copies [from, from + n) to out (n elements).
+    void copy(std::size_t from, std::size_t n, T* out) const {
+        while (n > 0) {
+            const std::vector<T>& c = chunks_[from / kChunk];
+            const std::size_t at = from % kChunk, m = std::min(n, kChunk - at);
+            std::copy(c.begin() + static_cast<long>(at), c.begin() + static_cast<long>(at + m), out);
+            out += m;
+            from += m;
+            n -= m;
+        }
+    }
+    // Moves everything to the end of `out` (reserved once to its final size) and frees each chunk
+    // as soon as it is copied: the peak is the array's size plus one chunk, not twice the size.
+    void move_to(std::vector<T>& out) {
+        out.reserve(out.size() + size_);
+        for (std::vector<T>& c : chunks_) {
+            out.insert(out.end(), c.begin(), c.end());
+            std::vector<T>().swap(c);
+        }
+        clear();
+    }
+    void clear() {
+        std::vector<std::vector<T>>().swap(chunks_);
+        size_ = 0;
+    }
+
+private:
+    std::vector<std::vector<T>> chunks_;
+    std::size_t size_ = 0;
+};
+
 }  // namespace
 
 std::uint64_t render_seed(const Scene& scene, const RenderOptions& options) {
@@ -93,20 +166,29 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         throw std::invalid_argument("the pattern has " + std::to_string(opt.pattern->size()) +
                                     " values but the display has " + std::to_string(L) + " pixels");
 
+    const bool streaming = opt.row_sink != nullptr && opt.max_matrix_bytes > 0;
+    if (streaming && (pattern || opt.pixels))
+        throw std::invalid_argument("render: streaming rows to a sink needs a full render of T (no pattern, no pixel subset)");
+
     RenderResult out;
-    std::vector<std::vector<std::pair<std::int32_t, float>>> rows(pattern ? 0 : static_cast<size_t>(K));
     if (pattern) {
         out.image.assign(static_cast<size_t>(K), 0.0);
         out.image_stderr.assign(static_cast<size_t>(K), 0.0);
     }
     out.tracked_defects = opt.track_defects;
     const long blocks = (items + kBlock - 1) / kBlock;
-    std::vector<PathStats> block_stats(static_cast<size_t>(blocks));
-    std::vector<std::vector<DefectPaths>> block_defects(opt.track_defects ? static_cast<size_t>(blocks) : 0);
     Progress progress(opt.progress, items, spp);
 
-    auto render_block = [&](long b) {
-        PathStats& stats = block_stats[static_cast<size_t>(b)];
+    // Waves: consecutive runs of blocks traced in parallel, then appended in block order. The
+    // blocks themselves (kBlock pixels each, merged in block order) are what make the result
+    // independent of threads; the wave length only sets how many blocks' rows wait in memory to be
+    // appended (enough per thread that the barrier between waves costs little).
+    const long arena_threads = opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency();
+    const long wave_blocks = std::max(256L, 16L * arena_threads);
+    std::vector<BlockRows> wave(static_cast<size_t>(std::min(blocks, wave_blocks)));
+
+    auto render_block = [&](long b, BlockRows& br) {
+        PathStats& stats = br.stats;
         std::vector<Entry> entries;
         entries.reserve(static_cast<size_t>(spp));
         // The branches of one camera sample (one with the sample estimator); reused, so after the
@@ -114,7 +196,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         std::vector<PathResult> branches;
         for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
             const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
-            const size_t first_count = opt.track_defects ? block_defects[static_cast<size_t>(b)].size() : 0;
+            const size_t first_count = br.defects.size();
             entries.clear();
             double sum = 0, sum2 = 0;
             for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& o, const Vec3& d) {
@@ -130,7 +212,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                     const auto earlier = branches.begin() + static_cast<long>(i);
                     if (opt.track_defects && r.defect >= 0 &&
                         std::none_of(branches.begin(), earlier, [&](const PathResult& e) { return e.defect == r.defect; })) {
-                        auto& list = block_defects[static_cast<size_t>(b)];
+                        auto& list = br.defects;
                         auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
                                                [&](const DefectPaths& e) { return e.defect == r.defect; });
                         if (it == list.end())
@@ -150,11 +232,9 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                     sum2 += f * f;
                 }
             });
-            if (opt.track_defects) {
-                auto& list = block_defects[static_cast<size_t>(b)];
-                std::sort(list.begin() + static_cast<long>(first_count), list.end(),
+            if (opt.track_defects)
+                std::sort(br.defects.begin() + static_cast<long>(first_count), br.defects.end(),
                           [](const DefectPaths& a, const DefectPaths& c) { return a.defect < c.defect; });
-            }
             if (pattern) {
                 const double n = spp, mean = sum / n;
                 out.image[static_cast<size_t>(k)] = mean;
@@ -166,47 +246,116 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             // Merge equal columns, summing in sample order (stable sort keeps it).
             std::stable_sort(entries.begin(), entries.end(),
                              [](const Entry& a, const Entry& b) { return a.column < b.column; });
-            auto& row = rows[static_cast<size_t>(k)];
+            std::int32_t n = 0;
             for (size_t i = 0; i < entries.size();) {
                 double w = 0;
                 size_t j = i;
                 for (; j < entries.size() && entries[j].column == entries[i].column; ++j) w += entries[j].weight;
-                row.push_back({entries[i].column, static_cast<float>(w / spp)});
+                br.columns.push_back(entries[i].column);
+                br.values.push_back(static_cast<float>(w / spp));
+                ++n;
                 i = j;
             }
+            br.row_nnz.push_back(n);
         }
         progress.add(std::min(items, (b + 1) * kBlock) - b * kBlock);
     };
 
-    const auto all_blocks = [&] { tbb::parallel_for(0L, blocks, render_block); };
+    // T as it is assembled: the row offsets (whole), the entries in chunks; once streaming, only
+    // the current wave's rows, handed to the sink.
+    ChunkedArray<std::int32_t> held_indices;
+    ChunkedArray<float> held_data;
+    std::vector<std::int64_t> indptr;
+    if (!pattern) {
+        indptr.reserve(static_cast<size_t>(K) + 1);
+        indptr.push_back(0);
+    }
+    std::int64_t sent_rows = 0;  // rows already given to the sink
+    std::size_t total_nnz = 0;
+    CsrMatrix block;             // a wave's rows for the sink (reused)
+    block.cols = L;
+    const auto held_bytes = [&] {
+        return 8.0 * static_cast<double>(held_indices.size()) + 8.0 * static_cast<double>(indptr.size());
+    };
+    // Hands the held rows [sent_rows, indptr.size() - 1 + sent_rows) to the sink in pieces of at
+    // most one chunk of entries, and keeps none.
+    const auto send_held = [&] {
+        const std::int64_t rows_held = static_cast<std::int64_t>(indptr.size()) - 1;
+        std::int64_t r0 = 0;
+        while (r0 < rows_held) {
+            std::int64_t r1 = r0 + 1;
+            while (r1 < rows_held && indptr[static_cast<size_t>(r1 + 1)] - indptr[static_cast<size_t>(r0)] <=
+                                         static_cast<std::int64_t>(ChunkedArray<float>::kChunk))
+                ++r1;
+            const auto from = static_cast<size_t>(indptr[static_cast<size_t>(r0)]);
+            const auto n = static_cast<size_t>(indptr[static_cast<size_t>(r1)]) - from;
+            block.rows = r1 - r0;
+            block.indptr.resize(static_cast<size_t>(block.rows) + 1);
+            for (std::int64_t r = r0; r <= r1; ++r)
+                block.indptr[static_cast<size_t>(r - r0)] = indptr[static_cast<size_t>(r)] - static_cast<std::int64_t>(from);
+            block.indices.resize(n);
+            block.data.resize(n);
+            held_indices.copy(from, n, block.indices.data());
+            held_data.copy(from, n, block.data.data());
+            opt.row_sink->rows(sent_rows + r0, block);
+            r0 = r1;
+        }
+        sent_rows += rows_held;
+        held_indices.clear();
+        held_data.clear();
+        indptr.assign(1, 0);
+    };
+
+    const auto run_waves = [&] {
+        for (long w0 = 0; w0 < blocks; w0 += wave_blocks) {
+            const long w1 = std::min(blocks, w0 + wave_blocks);
+            for (long b = w0; b < w1; ++b) wave[static_cast<size_t>(b - w0)].clear();
+            tbb::parallel_for(w0, w1, [&](long b) { render_block(b, wave[static_cast<size_t>(b - w0)]); });
+            // In block order: statistics, defect counts, rows.
+            for (long b = w0; b < w1; ++b) {
+                BlockRows& br = wave[static_cast<size_t>(b - w0)];
+                out.stats.merge(br.stats);
+                out.defect_paths.insert(out.defect_paths.end(), br.defects.begin(), br.defects.end());
+                if (pattern) continue;
+                size_t at = 0;
+                for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
+                    const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
+                    // Rows outside the pixel subset stay empty.
+                    while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < k) indptr.push_back(indptr.back());
+                    const auto n = static_cast<size_t>(br.row_nnz[static_cast<size_t>(item - b * kBlock)]);
+                    held_indices.append(br.columns.data() + at, n);
+                    held_data.append(br.values.data() + at, n);
+                    indptr.push_back(indptr.back() + static_cast<std::int64_t>(n));
+                    at += n;
+                    total_nnz += n;
+                }
+            }
+            if (streaming && (out.streamed || held_bytes() > static_cast<double>(opt.max_matrix_bytes))) {
+                out.streamed = true;
+                send_held();
+            }
+        }
+    };
     if (opt.threads > 0) {
         tbb::task_arena arena(opt.threads);
-        arena.execute(all_blocks);
+        arena.execute(run_waves);
     } else {
-        all_blocks();
+        run_waves();
     }
-    for (const auto& s : block_stats) out.stats.merge(s);
-    for (auto& list : block_defects) {
-        out.defect_paths.insert(out.defect_paths.end(), list.begin(), list.end());
-        std::vector<DefectPaths>().swap(list);
-    }
+    std::vector<BlockRows>().swap(wave);
 
     if (!pattern) {
-        CsrMatrix& T = out.T;
-        T.rows = K;
-        T.cols = L;
-        T.indptr.assign(static_cast<size_t>(K) + 1, 0);
-        size_t nnz = 0;
-        for (long k = 0; k < K; ++k) nnz += rows[static_cast<size_t>(k)].size();
-        T.indices.reserve(nnz);
-        T.data.reserve(nnz);
-        for (long k = 0; k < K; ++k) {
-            for (const auto& [c, v] : rows[static_cast<size_t>(k)]) {
-                T.indices.push_back(c);
-                T.data.push_back(v);
-            }
-            T.indptr[static_cast<size_t>(k) + 1] = static_cast<std::int64_t>(T.indices.size());
-            std::vector<std::pair<std::int32_t, float>>().swap(rows[static_cast<size_t>(k)]);
+        while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < K) indptr.push_back(indptr.back());
+        out.nnz = total_nnz;
+        if (out.streamed) {
+            if (indptr.size() > 1) send_held();
+        } else {
+            CsrMatrix& T = out.T;
+            T.rows = K;
+            T.cols = L;
+            T.indptr = std::move(indptr);
+            held_indices.move_to(T.indices);
+            held_data.move_to(T.data);
         }
     }
     out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

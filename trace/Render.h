@@ -9,13 +9,22 @@
 // Sample s of pixel k draws all its random numbers from the stream Rng(seed, k, s) (all its
 // branches, in their fixed order), pixels are processed in fixed blocks and each row sums its
 // samples in sample order (branches in branch order), so the result is bit-identical for a given
-// seed whatever the number of threads. Memory grows with the nonzeros: a row holds at most one
-// entry per branch until it is merged.
+// seed whatever the number of threads.
+//
+// Memory. Pixels are traced in waves of consecutive blocks; after each wave its rows are appended,
+// in row order, to T's arrays, which grow in fixed chunks (kept in pages the allocator returns to
+// the system when freed) and are copied once into RenderResult::T at the end, chunk by chunk, each
+// freed as soon as it is copied. So the peak is T's own size (8 bytes per nonzero, 8 per row) plus
+// one wave's rows and one chunk: no per-row containers, no doubling vectors, no second copy of T.
+// With a row sink and a budget (RenderOptions::row_sink, max_matrix_bytes), T never exceeds the
+// budget in memory: once what it holds would, the render hands its rows to the sink block by
+// block, in row order, and keeps none (streaming; e.g. ltm.npz written from the blocks).
 //
 // Threads: render() keeps no process-wide thread state. With options.threads = n > 0 it runs in a
 // task arena of its own with n threads; with 0 it runs in the caller's arena (all cores when the
 // caller is in none), so several renders can share one arena concurrently (the dataset command
 // renders several samples at once this way).
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -28,6 +37,16 @@ struct DefectPaths {
     std::int32_t pixel;   // camera pixel k
     std::int32_t defect;  // index into the scene's defects
     std::uint32_t paths;  // samples of pixel k whose path met this defect first
+};
+
+// Receives T's rows in row order when a render streams (RenderOptions::row_sink).
+class RowSink {
+public:
+    virtual ~RowSink() = default;
+    // Rows [first_row, first_row + block.rows) of T: `block` is a valid CSR matrix with T's
+    // columns. Blocks arrive in order and cover every row exactly once; a block may have any
+    // number of rows (whole waves of pixel blocks, not camera image rows).
+    virtual void rows(std::int64_t first_row, const CsrMatrix& block) = 0;
 };
 
 struct RenderOptions {
@@ -43,10 +62,19 @@ struct RenderOptions {
     // Count, per camera pixel and defect, the samples whose path met the defect first
     // (PathResult::defect): the ground truth of where each defect is seen (study/GroundTruth.h).
     bool track_defects = false;
+    // Streaming (with `row_sink`, for a full render without a pattern or pixel subset): once T's
+    // arrays held in memory (8 bytes per nonzero + 8 per row) would exceed max_matrix_bytes, the
+    // rows rendered so far and every later block go to row_sink instead; RenderResult::T is then
+    // empty and `streamed` set. 0, or no sink: T is always kept whole. The rows the sink receives
+    // are bit-identical to T's.
+    RowSink* row_sink = nullptr;
+    std::size_t max_matrix_bytes = 0;
 };
 
 struct RenderResult {
-    CsrMatrix T;                         // without a pattern
+    CsrMatrix T;                         // without a pattern, unless streamed
+    bool streamed = false;               // T's rows went to RenderOptions::row_sink
+    std::size_t nnz = 0;                 // T's nonzeros (streamed or not)
     std::vector<double> image;           // with a pattern: y per camera pixel ...
     std::vector<double> image_stderr;    // ... and its Monte Carlo standard error
     // track_defects: how many of each pixel's samples met each defect first, for the pairs with at
