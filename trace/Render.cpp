@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,6 +11,9 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
+#include <new>
+#include <type_traits>
 #include <mutex>
 #include <thread>
 
@@ -85,23 +89,32 @@ struct BlockRows {
 };
 
 // An array that grows in fixed chunks instead of one doubling vector: appending never copies what
-// is there, and a chunk is large enough (2^23 elements, 32 MiB of 4-byte values, at glibc's
-// largest dynamic mmap threshold) that malloc maps it on its own, so freeing it returns its pages
-// to the system at once. Pages are touched only as they are written (reserve, no value
-// initialisation), so a small render's RSS is what it writes, not 32 MiB.
+// is there, and each chunk is its own anonymous mapping (mmap), so its pages go back to the system
+// the moment they are released, whatever the allocator's thresholds. Pages are touched only as
+// they are written, so a small render's RSS is what it writes, not a chunk. move_to copies the
+// array into the final vector in steps of kStep elements and releases each step's pages right
+// after (madvise MADV_DONTNEED), so moving T costs one step beyond T itself, not a second T.
 template <class T>
 class ChunkedArray {
 public:
-    static constexpr std::size_t kChunk = std::size_t(1) << 23;
+    static constexpr std::size_t kChunk = std::size_t(1) << 22;  // elements: 16 MiB of 4-byte values
+    static constexpr std::size_t kStep = std::size_t(1) << 18;   // 1 MiB, a multiple of the page size
+    static_assert(std::is_trivially_copyable_v<T>, "chunks hold plain values");
+
+    ChunkedArray() = default;
+    ChunkedArray(const ChunkedArray&) = delete;
+    ChunkedArray& operator=(const ChunkedArray&) = delete;
+    ~ChunkedArray() { clear(); }
+
     void append(const T* v, std::size_t n) {
         while (n > 0) {
-            if (chunks_.empty() || chunks_.back().size() == kChunk) {
-                chunks_.emplace_back();
-                chunks_.back().reserve(kChunk);
+            if (size_ == chunks_.size() * kChunk) {
+                void* p = ::mmap(nullptr, kChunk * sizeof(T), PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+                if (p == MAP_FAILED) throw std::bad_alloc();
+                chunks_.push_back(static_cast<T*>(p));
             }
-            std::vector<T>& c = chunks_.back();
-            const std::size_t m = std::min(n, kChunk - c.size());
-            c.insert(c.end(), v, v + m);
+            const std::size_t at = size_ % kChunk, m = std::min(n, kChunk - at);
+            std::memcpy(chunks_.back() + at, v, m * sizeof(T));
             v += m;
             n -= m;
             size_ += m;
@@ -111,31 +124,33 @@ public:
     // Copies [from, from + n) to out (n elements).
     void copy(std::size_t from, std::size_t n, T* out) const {
         while (n > 0) {
-            const std::vector<T>& c = chunks_[from / kChunk];
             const std::size_t at = from % kChunk, m = std::min(n, kChunk - at);
-            std::copy(c.begin() + static_cast<long>(at), c.begin() + static_cast<long>(at + m), out);
+            std::memcpy(out, chunks_[from / kChunk] + at, m * sizeof(T));
             out += m;
             from += m;
             n -= m;
         }
     }
-    // Moves everything to the end of `out` (reserved once to its final size) and frees each chunk
-    // as soon as it is copied: the peak is the array's size plus one chunk, not twice the size.
+    // Moves everything to the end of `out` (reserved once to its final size), releasing the pages
+    // behind the copy as it goes, then frees the chunks.
     void move_to(std::vector<T>& out) {
         out.reserve(out.size() + size_);
-        for (std::vector<T>& c : chunks_) {
-            out.insert(out.end(), c.begin(), c.end());
-            std::vector<T>().swap(c);
+        for (std::size_t from = 0; from < size_; from += kStep) {
+            T* src = chunks_[from / kChunk] + from % kChunk;
+            const std::size_t m = std::min(kStep, size_ - from);
+            out.insert(out.end(), src, src + m);
+            ::madvise(src, kStep * sizeof(T), MADV_DONTNEED);  // within the chunk: kChunk is a multiple of kStep
         }
         clear();
     }
     void clear() {
-        std::vector<std::vector<T>>().swap(chunks_);
+        for (T* c : chunks_) ::munmap(c, kChunk * sizeof(T));
+        chunks_.clear();
         size_ = 0;
     }
 
 private:
-    std::vector<std::vector<T>> chunks_;
+    std::vector<T*> chunks_;
     std::size_t size_ = 0;
 };
 

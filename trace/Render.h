@@ -12,10 +12,10 @@
 // seed whatever the number of threads.
 //
 // Memory. Pixels are traced in waves of consecutive blocks; after each wave its rows are appended,
-// in row order, to T's arrays, which grow in fixed chunks (kept in pages the allocator returns to
-// the system when freed) and are copied once into RenderResult::T at the end, chunk by chunk, each
-// freed as soon as it is copied. So the peak is T's own size (8 bytes per nonzero, 8 per row) plus
-// one wave's rows and one chunk: no per-row containers, no doubling vectors, no second copy of T.
+// in row order, to T's arrays, which grow in fixed chunks of their own mappings and are copied
+// once into RenderResult::T at the end, each copied stretch's pages released right behind the
+// copy. So the peak is T's own size (8 bytes per nonzero, 8 per row) plus one wave's rows and a
+// few MiB: no per-row containers, no doubling vectors, no second copy of T.
 // With a row sink and a budget (RenderOptions::row_sink, max_matrix_bytes), T never exceeds the
 // budget in memory: once what it holds would, the render hands its rows to the sink block by
 // block, in row order, and keeps none (streaming; e.g. ltm.npz written from the blocks).
