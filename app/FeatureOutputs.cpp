@@ -1,5 +1,6 @@
 #include "app/FeatureOutputs.h"
 
+#include <sys/resource.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -78,8 +79,8 @@ std::vector<double> numbers_at(const io::Json& root, const std::vector<std::stri
 }  // namespace
 
 void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
-                    int threads, const io::Json& result, const StageReport& report) {
-    const io::Json run = {{"ltmsim_version", kVersion},
+                    int threads, const io::Json& result, const StageReport& report, const io::Json& memory) {
+    io::Json run = {{"ltmsim_version", kVersion},
                           {"scene", scene_to_json(scene)},
                           {"seed", scene.seed},
                           {"representation", to_string(representation)},
@@ -89,16 +90,40 @@ void write_run_json(const std::string& dir, const Scene& scene, const RenderResu
                           {"render_seconds", io::json_number(r.seconds)},
                           {"stages", report.to_json()},
                           {"path_statistics", stats_json(r.stats)}};
+    if (!memory.is_null()) {
+        io::Json m = memory;
+        rusage ru{};
+        getrusage(RUSAGE_SELF, &ru);
+        m["process_peak_rss_bytes"] = static_cast<std::uint64_t>(ru.ru_maxrss) * 1024;  // kB on Linux
+        run["memory"] = std::move(m);
+    }
     io::write_json_file((fs::path(dir) / "run.json").string(), run, "run record");
 }
 
+io::Json memory_json(const RenderMemory& m, const RenderResult& r, std::int64_t rows, std::size_t max_matrix_bytes) {
+    io::Json j = io::Json::object();
+    if (m.measured) {
+        j["render_peak_rss_bytes"] = m.peak_rss_bytes;
+        j["render_start_rss_bytes"] = m.start_rss_bytes;
+        j["render_peak_is_per_run"] = m.per_run;
+        j["peak_rss_method"] = m.method;
+    }
+    // What T's arrays take in memory: int32 indices and float32 data per nonzero, int64 indptr.
+    if (rows > 0) j["matrix_bytes"] = 8 * static_cast<std::uint64_t>(r.nnz) + 8 * (static_cast<std::uint64_t>(rows) + 1);
+    j["max_memory_bytes"] = static_cast<std::uint64_t>(max_matrix_bytes);
+    j["streamed"] = r.streamed;
+    return j;
+}
+
 void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
-                         StageReport& report) {
+                         StageReport& report, const io::Json& memory) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     const fs::path d(dir);
     std::vector<fs::path> written;
     const RenderResult& r = run.render;
+    const std::int64_t rows = static_cast<std::int64_t>(scene.camera.resolution[0]) * scene.camera.resolution[1];
+    const std::int64_t cols = static_cast<std::int64_t>(scene.display.resolution[0]) * scene.display.resolution[1];
     try {
         StageTimer t_write(&report, "write");
         // The matrix, the reference and the feature images are independent files: written in
@@ -106,7 +131,12 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
         written = {d / "ltm.npz", d / "features.exr", d / "features.npz"};
         if (!scene.defects.empty()) written.push_back(d / "reference.exr");
         tbb::parallel_invoke(
-            [&] { write_ltm_npz((d / "ltm.npz").string(), r.T); },
+            [&] {
+                if (r.streamed)
+                    run.streamed_T->commit();  // the archive from the spilled rows, atomically
+                else
+                    write_ltm_npz((d / "ltm.npz").string(), r.T);
+            },
             [&] {
                 if (scene.defects.empty()) return;
                 std::vector<float> mx(run.reference.size() / 2), my(run.reference.size() / 2);
@@ -120,8 +150,8 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
             [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}); });
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
-                       {{"rows", r.T.rows}, {"cols", r.T.cols}, {"nnz", r.T.nnz()}, {"reference_pixels", run.reference_pixels}, {"reference_reused", run.reference_reused}},
-                       report);
+                       {{"rows", rows}, {"cols", cols}, {"nnz", r.nnz}, {"streamed", r.streamed}, {"reference_pixels", run.reference_pixels}, {"reference_reused", run.reference_reused}},
+                       report, memory);
     } catch (...) {
         for (const auto& p : written) fs::remove(p, ec);
         throw;

@@ -28,15 +28,22 @@ RenderGeometry render_geometry(const Scene& scene);
 
 // DIR/run.json: the resolved scene, seed, version, representation, estimator ({"estimator":
 // "split", "split_depth": 4} or {"estimator": "sample"}), timings and path statistics;
-// `result` is a JSON object describing what was rendered.
+// `result` is a JSON object describing what was rendered; `memory`, when not null, is recorded
+// under "memory" (memory_json).
 void write_run_json(const std::string& dir, const Scene& scene, const RenderResult& r, Representation representation,
-                    int threads, const io::Json& result, const StageReport& report);
+                    int threads, const io::Json& result, const StageReport& report, const io::Json& memory = nullptr);
 
-// A render folder: DIR/ltm.npz, DIR/reference.exr (for a scene with defects), DIR/features.exr
+// run.json's "memory": the render stage's peak RSS (study/SceneRun.h, RenderMemory), T's bytes
+// (for rows > 0: T's camera pixels; 8 bytes per nonzero and 8 per row + 1), the budget (`render --max-memory`, bytes; 0 for none) and whether T was streamed, and the
+// process's peak RSS so far (getrusage, the whole command up to run.json). docs/cli.md lists the
+// keys.
+io::Json memory_json(const RenderMemory& m, const RenderResult& r, std::int64_t rows, std::size_t max_matrix_bytes);
+
+// A render folder: DIR/ltm.npz (written from T, or run.streamed_T committed when T was streamed), DIR/reference.exr (for a scene with defects), DIR/features.exr
 // and DIR/features.npz with DIR/features/*.png, and DIR/run.json (written last). On failure the
 // files this call wrote are removed and the exception rethrown.
 void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
-                         StageReport& report);
+                         StageReport& report, const io::Json& memory = nullptr);
 
 // Reads the camera and display from DIR/run.json; throws std::runtime_error naming the file.
 RenderGeometry read_render_geometry(const std::string& dir);

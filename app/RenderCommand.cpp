@@ -1,8 +1,13 @@
 // `ltmsim render SCENE -o DIR`: the light transport matrix DIR/ltm.npz and DIR/run.json; with
 // --pattern IMAGE, the camera image for that display pattern (DIR/image.exr, DIR/image.png).
+#include <unistd.h>
+
+#include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
 #include <iostream>
+#include <limits>
+#include <optional>
 
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
@@ -10,6 +15,7 @@
 #include "io/Image.h"
 #include "scene/SceneJson.h"
 #include "io/LtmFile.h"
+#include "io/PeakRss.h"
 #include "study/SceneRun.h"
 #include "trace/Render.h"
 
@@ -25,9 +31,53 @@ struct RenderArgs {
     bool overwrite = false, verbose = false, no_robust = false;
     FeatureOptions features{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
     EstimatorArgs estimator;                  // overrides the scene's tracing section
+    std::string max_memory;                   // GiB, as typed
+    bool max_memory_given = false;            // else the default
 };
 
+// The default budget for T in memory: half the machine's physical memory, so that T, its feature
+// images and the writing of the archive fit beside what else runs; 0 where the system does not
+// say (then T is always kept whole).
+std::size_t default_max_memory() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page <= 0) return 0;
+    return static_cast<std::size_t>(pages) / 2 * static_cast<std::size_t>(page);
+}
+
+// --max-memory's value in bytes, or nullopt after printing why it is not a positive number of GiB.
+std::optional<std::size_t> parse_max_memory(const std::string& text, bool given) {
+    if (!given) return default_max_memory();
+    double gib = 0;
+    std::size_t used = 0;
+    try {
+        gib = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text.size() || !std::isfinite(gib)) {
+        std::cerr << fmt::format("ltmsim render: --max-memory: '{}' is not a number (the budget for T in memory, in GiB, "
+                                 "e.g. --max-memory 8 or 0.5)\n",
+                                 text);
+        return std::nullopt;
+    }
+    if (gib <= 0) {
+        std::cerr << fmt::format("ltmsim render: --max-memory: {} GiB is not positive (the budget for T in memory must be > 0; "
+                                 "leave the option out for the default, half the physical memory)\n",
+                                 text);
+        return std::nullopt;
+    }
+    // At least one byte: a tiny budget streams every row (how the tests force streaming).
+    const double bytes = std::ldexp(gib, 30);
+    return bytes >= 1.8e19 ? std::numeric_limits<std::size_t>::max() : std::max<std::size_t>(1, static_cast<std::size_t>(bytes));
+}
+
 int run(const RenderArgs& a) {
+    const std::optional<std::size_t> max_memory = parse_max_memory(a.max_memory, a.max_memory_given);
+    if (!max_memory) return 2;
+    if (!a.pattern.empty() && a.max_memory_given) {
+        std::cerr << "ltmsim render: --max-memory applies to T; a --pattern render keeps no T (only its image)\n";
+        return 2;
+    }
     if (!output_folder_ok("render", a.dir)) return 2;
     std::vector<std::string> outputs = a.pattern.empty()
                                            ? std::vector<std::string>{"ltm.npz", "run.json", "features.exr", "features.npz"}
@@ -84,6 +134,9 @@ int run(const RenderArgs& a) {
         so.threads = a.threads;
         so.progress = true;
         so.features = a.features;
+        so.max_matrix_bytes = *max_memory;
+        so.stream_path = (fs::path(a.dir) / "ltm.npz").string();
+        so.measure_memory = true;
         run = run_scene(scene, loaded->solid, so, &report);
     } else {
         TracerOptions topt;
@@ -97,7 +150,9 @@ int run(const RenderArgs& a) {
         ropt.progress = true;
         ropt.pattern = &pattern;
         StageTimer t_render(&report, "render");
+        const io::PeakRssMeter meter;
         run.render = render(tracer, ropt);
+        run.render_memory = {true, meter.peak_bytes(), meter.start_bytes(), meter.per_run(), meter.method()};
         run.representation = representation;
         t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", run.render.stats.paths,
                                   run.render.stats.segments, run.render.stats.paths / std::max(run.render.seconds, 1e-9) / 1e6));
@@ -106,7 +161,10 @@ int run(const RenderArgs& a) {
 
     try {
         if (pattern.empty()) {
-            write_render_folder(a.dir, scene, run, a.threads, report);
+            write_render_folder(a.dir, scene, run, a.threads, report,
+                                memory_json(run.render_memory, r,
+                                            static_cast<std::int64_t>(scene.camera.resolution[0]) * scene.camera.resolution[1],
+                                            *max_memory));
         } else {
             std::error_code ec;
             fs::create_directories(a.dir, ec);
@@ -130,7 +188,7 @@ int run(const RenderArgs& a) {
                 written.push_back(dir / "image.png");
                 write_run_json(a.dir, scene, r, representation, a.threads,
                                {{"pattern", a.pattern}, {"image", "image.exr"}},
-                               report);
+                               report, memory_json(run.render_memory, r, 0, 0));
             } catch (...) {
                 for (const auto& p : written) fs::remove(p, ec);
                 throw;
@@ -159,9 +217,15 @@ void add_render_command(CLI::App& app) {
     cmd->add_flag("--no-robust", args->no_robust, "Embree's fast (non-watertight) traversal");
     add_estimator_options(cmd, args->estimator);
     cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
+    CLI::Option* max_memory = cmd->add_option("--max-memory", args->max_memory,
+                    "Budget for T in memory, GiB (default: half the physical memory); a larger T is traced in row blocks "
+                    "and streamed to ltm.npz (features from the same blocks)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
-    cmd->callback([args] { run_guarded("render", [&] { return run(*args); }); });
+    cmd->callback([args, max_memory] {
+        args->max_memory_given = max_memory->count() > 0;
+        run_guarded("render", [&] { return run(*args); });
+    });
 }
 
 }  // namespace ltm::app

@@ -1,12 +1,59 @@
 #include "study/SceneRun.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <fmt/format.h>
+#include <optional>
 #include <stdexcept>
+
+#include "io/PeakRss.h"
 
 #include "scene/SceneSolid.h"
 
 namespace ltm {
+
+namespace {
+
+// The rows of a streaming render: appended to ltm.npz's spill files (created at the first block,
+// when the render has decided T does not fit) and turned into their features on the way.
+class StreamedRows : public RowSink {
+public:
+    StreamedRows(const Scene& scene, const std::string& path, const FeatureOptions& options)
+        : scene_(scene), path_(path), options_(options) {}
+
+    void rows(std::int64_t first_row, const CsrMatrix& block) override {
+        const long K = static_cast<long>(scene_.camera.resolution[0]) * scene_.camera.resolution[1];
+        if (!file) {
+            const std::filesystem::path folder = std::filesystem::path(path_).parent_path();
+            if (!folder.empty()) std::filesystem::create_directories(folder);
+            file = std::make_shared<LtmFileStream>(path_, K, static_cast<std::int64_t>(scene_.display.resolution[0]) *
+                                                                 scene_.display.resolution[1]);
+        }
+        file->append(block);
+        // A block's rows as a one-row "camera" of block.rows pixels: the features of each row are
+        // the same whatever image the row sits in.
+        const FeatureImages f =
+            compute_features(block, static_cast<int>(block.rows), 1, display_grid(scene_), options_, nullptr);
+        if (features.channels.empty()) {
+            features.width = scene_.camera.resolution[0];
+            features.height = scene_.camera.resolution[1];
+            for (const auto& [name, values] : f.channels) features.channels.push_back({name, std::vector<float>(static_cast<size_t>(K))});
+        }
+        for (size_t c = 0; c < f.channels.size(); ++c)
+            std::copy(f.channels[c].second.begin(), f.channels[c].second.end(),
+                      features.channels[c].second.begin() + first_row);
+    }
+
+    std::shared_ptr<LtmFileStream> file;
+    FeatureImages features;
+
+private:
+    const Scene& scene_;
+    std::string path_;
+    FeatureOptions options_;
+};
+
+}  // namespace
 
 Representation auto_representation(const Solid& solid) {
     return Tracer::analytic_supported(solid, nullptr) ? Representation::Analytic : Representation::Refined;
@@ -57,6 +104,7 @@ std::vector<float> defect_free_reference(const Scene& scene, const RenderResult&
     ro.progress = false;
     ro.track_defects = false;
     ro.pixels = &met;
+    ro.row_sink = nullptr;  // a subset render keeps its small T
     const RenderResult free_render = render(Tracer(free, free_solid, o), ro);
     FeatureOptions means_only;
     means_only.dark_block = 0;
@@ -90,16 +138,38 @@ SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions
     ro.threads = options.threads;
     ro.progress = options.progress;
     ro.track_defects = true;
+    const FeatureOptions feature_options = resolved_feature_options(scene, options.features);
+    std::optional<StreamedRows> streamed;
+    if (options.max_matrix_bytes > 0 && !options.stream_path.empty()) {
+        streamed.emplace(scene, options.stream_path, feature_options);
+        ro.row_sink = &*streamed;
+        ro.max_matrix_bytes = options.max_matrix_bytes;
+    }
     StageTimer t_render(report, "render");
+    std::optional<io::PeakRssMeter> meter;
+    if (options.measure_memory) meter.emplace();
     out.render = render(tracer, ro);
+    ro.row_sink = nullptr;  // the reference's subset renders keep their small T
+    if (meter) {
+        out.render_memory = {true, meter->peak_bytes(), meter->start_bytes(), meter->per_run(), meter->method()};
+    }
     const RenderResult& r = out.render;
-    t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s", r.stats.paths, r.stats.segments,
-                              r.stats.paths / std::max(r.seconds, 1e-9) / 1e6));
+    t_render.done(fmt::format("{} paths, {} segments, {:.3g} Mpaths/s{}", r.stats.paths, r.stats.segments,
+                              r.stats.paths / std::max(r.seconds, 1e-9) / 1e6,
+                              r.streamed ? fmt::format(", T streamed to {} ({} nonzeros, {} bytes, over the {}-byte budget)",
+                                                       options.stream_path, r.nnz, 8 * r.nnz + 8 * (tracer.camera().pixels() + 1),
+                                                       options.max_matrix_bytes)
+                                         : std::string()));
 
     StageTimer t_features(report, "features");
-    out.features = compute_features(r.T, scene.camera.resolution[0], scene.camera.resolution[1], display_grid(scene),
-                                    resolved_feature_options(scene, options.features), nullptr);
-    t_features.done(fmt::format("{} channels", out.features.channels.size()));
+    if (r.streamed) {
+        out.features = std::move(streamed->features);  // computed block by block as the rows passed
+        out.streamed_T = streamed->file;
+    } else {
+        out.features = compute_features(r.T, scene.camera.resolution[0], scene.camera.resolution[1], display_grid(scene),
+                                        feature_options, nullptr);
+    }
+    t_features.done(fmt::format("{} channels{}", out.features.channels.size(), r.streamed ? ", from the streamed rows" : ""));
 
     StageTimer t_ref(report, "reference");
     out.reference = defect_free_reference(scene, r, out.features.channel("MeanX"), out.features.channel("MeanY"),

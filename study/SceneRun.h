@@ -9,12 +9,15 @@
 // its own mean and its deflection exactly 0. Only the pixels some path of which met a defect are
 // rendered again without the defects (RenderOptions::pixels), which makes the reference cost in
 // proportion to the defects' images instead of a second full render.
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "defects/SolidBuilder.h"
 #include "features/Features.h"
 #include "geometry/StageReport.h"
+#include "io/LtmFile.h"
 #include "study/ReferenceCache.h"
 #include "scene/Scene.h"
 #include "trace/Render.h"
@@ -32,6 +35,25 @@ struct SceneRunOptions {
     // Shared by scenes with the same object (study/ReferenceCache.h): each pixel's reference is
     // rendered once for all of them. A defect-free scene run through it gives every pixel's.
     ReferenceCache* reference_cache = nullptr;
+    // Streaming (`render --max-memory`): when T's arrays would exceed max_matrix_bytes (> 0), its
+    // rows go to an io::LtmFileStream for `stream_path` (the ltm.npz to be; its folder is created
+    // if missing) instead of SceneRun::render.T, and the features are computed from the same row
+    // blocks as they pass (every feature is a function of its own row, so the images are the
+    // ones the whole T gives, bit for bit). The caller commits SceneRun::streamed_T.
+    std::size_t max_matrix_bytes = 0;
+    std::string stream_path;
+    // Measure the render stage's own peak RSS (io/PeakRss.h: resets the process's high-water
+    // mark, so only where no other render runs at the same time: `render`, not `dataset`).
+    bool measure_memory = false;
+};
+
+// The render stage's memory (SceneRunOptions::measure_memory).
+struct RenderMemory {
+    bool measured = false;
+    std::uint64_t peak_rss_bytes = 0;   // the largest RSS during the render stage
+    std::uint64_t start_rss_bytes = 0;  // RSS when it began (what the process held already)
+    bool per_run = false;               // the peak is the stage's own (io::PeakRssMeter::per_run)
+    std::string method;                 // io::PeakRssMeter::method
 };
 
 struct SceneRun {
@@ -41,6 +63,9 @@ struct SceneRun {
     FeatureImages features;          // with Deflection* (exactly 0 for a defect-free scene)
     long reference_pixels = 0;       // pixels rendered again without the defects
     long reference_reused = 0;       // pixels whose reference came from the cache
+    // render.streamed: T's rows, spilled beside stream_path, waiting for commit() (the archive).
+    std::shared_ptr<LtmFileStream> streamed_T;
+    RenderMemory render_memory;
 };
 
 // Analytic where no defect cuts the glass (no mesh needed), else Refined.

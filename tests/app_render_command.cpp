@@ -576,3 +576,67 @@ TEST_F(RenderCommand, BadEstimatorInputExitsTwoWithALocatedMessage) {
         EXPECT_FALSE(fs::exists(out)) << c.tracing << c.options;
     }
 }
+
+// ---- --max-memory: T streamed to ltm.npz in row blocks when it exceeds the budget ----
+
+TEST_F(RenderCommand, AStreamedRenderWritesTheSameFilesAsOneThatKeepsT) {
+    // A budget of 2^-30 GiB = 1 byte: every row is streamed (spilled beside ltm.npz, the archive
+    // written from the spill files, the features computed from the same blocks). Every file is
+    // byte-identical to the render that keeps T whole; run.json says which way T went.
+    const fs::path whole = dir / "whole", streamed = dir / "streamed";
+    Outcome r = ltmsim(render(scene, whole, "--threads 2"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = ltmsim(render(scene, streamed, "--threads 1 --max-memory 9.313225746154785e-10 --verbose"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("T streamed"), std::string::npos) << r.err;
+    expect_outputs(streamed, {"ltm.npz", "run.json", "features.exr", "features.npz", "reference.exr"});
+    for (const char* f : {"ltm.npz", "features.exr", "features.npz", "reference.exr"})
+        EXPECT_EQ(slurp(whole / f), slurp(streamed / f)) << f << " differs";
+
+    const ltm::io::Json a = ltm::io::read_json_file((whole / "run.json").string(), "run record");
+    const ltm::io::Json b = ltm::io::read_json_file((streamed / "run.json").string(), "run record");
+    EXPECT_EQ(a["result"]["streamed"], false);
+    EXPECT_EQ(b["result"]["streamed"], true);
+    EXPECT_EQ(a["result"]["nnz"], b["result"]["nnz"]);
+    EXPECT_EQ(b["memory"]["streamed"], true);
+    EXPECT_EQ(b["memory"]["max_memory_bytes"], 1);
+    EXPECT_EQ(a["memory"]["streamed"], false);
+    const std::uint64_t nnz = a["result"]["nnz"].get<std::uint64_t>();
+    EXPECT_EQ(a["memory"]["matrix_bytes"].get<std::uint64_t>(), 8 * nnz + 8 * (kM * kN + 1));
+    for (const ltm::io::Json* j : {&a, &b}) {
+        const ltm::io::Json& m = (*j)["memory"];
+        ASSERT_TRUE(m.contains("render_peak_rss_bytes")) << m.dump();
+        EXPECT_GE(m["render_peak_rss_bytes"].get<std::uint64_t>(), m["render_start_rss_bytes"].get<std::uint64_t>());
+        EXPECT_GE(m["process_peak_rss_bytes"].get<std::uint64_t>(), m["render_peak_rss_bytes"].get<std::uint64_t>());
+        EXPECT_TRUE(m["peak_rss_method"].is_string());
+    }
+
+    if (!python_has_scipy(dir)) LTM_INTEROP_SKIP() << kPython << " cannot import numpy and scipy.sparse";
+    const Outcome py = run_shell(std::string(kPython) + " -c 'import sys, scipy.sparse as sp; T = sp.load_npz(sys.argv[1]); "
+                                                        "print(T.format, T.shape[0], T.shape[1], T.nnz, T.has_canonical_format)' '" +
+                                     (streamed / "ltm.npz").string() + "'",
+                                 dir);
+    EXPECT_EQ(py.status, 0) << py.err;
+    EXPECT_EQ(py.out, "csr " + std::to_string(kM * kN) + " " + std::to_string(kP * kQ) + " " + std::to_string(nnz) + " True\n")
+        << py.err;
+}
+
+TEST_F(RenderCommand, BadMaxMemoryExitsTwoNamingTheOptionAndWritesNothing) {
+    const fs::path out = dir / "out";
+    for (const char* v : {"0", "-1", "-0.5", "abc", "1e", "8GiB", "nan", "inf", "''"}) {
+        SCOPED_TRACE(v);
+        const Outcome r = ltmsim(render(scene, out, std::string("--max-memory ") + v), dir);
+        EXPECT_EQ(r.status, 2) << r.err;
+        EXPECT_EQ(r.err.rfind("ltmsim render: --max-memory: ", 0), 0u) << r.err;
+        EXPECT_FALSE(fs::exists(out));
+    }
+    EXPECT_NE(ltmsim(render(scene, out, "--max-memory abc"), dir).err.find("'abc' is not a number"), std::string::npos);
+    EXPECT_NE(ltmsim(render(scene, out, "--max-memory 0"), dir).err.find("0 GiB is not positive"), std::string::npos);
+    // A pattern render keeps no T: the budget does not apply, and saying so beats ignoring it.
+    const fs::path pattern = dir / "p.png";
+    write_gray_png(pattern, kQ, kP, std::vector<std::uint8_t>(static_cast<size_t>(kQ * kP), 255));
+    const Outcome r = ltmsim(render(scene, out, "--pattern '" + pattern.string() + "' --max-memory 1"), dir);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--max-memory applies to T"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));
+}
