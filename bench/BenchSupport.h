@@ -39,9 +39,9 @@ inline Args parse_args(int argc, char** argv, Args a = {}) {
 }
 
 // The paper scene (bench_trace, bench_estimator): the paper's lens with three bubbles of 0.1 mm
-// radius, an n x n camera at spp samples per pixel, 500 x 500 display pixels, chord tolerance
-// `chord` mm.
-inline std::string paper_scene(int n, int spp, double chord = 1e-3) {
+// radius, an n x n camera at spp samples per pixel, display x display pixels (500 x 500 unless
+// given; bench_scale uses 2000 x 2000) over the same 100 x 100 mm, chord tolerance `chord` mm.
+inline std::string paper_scene(int n, int spp, double chord = 1e-3, int display = 500) {
     char buf[1024];
     std::snprintf(buf, sizeof buf, R"(
 object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
@@ -50,11 +50,11 @@ defects:
   - {type: bubble, center: [4.0, 0.0, 0.0], radius: 0.0997}
   - {type: bubble, center: [8.0, 0.0, 0.0], radius: 0.0997}
 camera: {resolution: [%d, %d], size: [25.0, 25.0], numerical_aperture: 0.01, samples_per_pixel: %d}
-display: {resolution: [500, 500], size: [100.0, 100.0], z: 60.0}
+display: {resolution: [%d, %d], size: [100.0, 100.0], z: 60.0}
 mesh: {chord_tolerance: %g}
 seed: 1
 )",
-                  n, n, spp, chord);
+                  n, n, spp, display, display, chord);
     return buf;
 }
 

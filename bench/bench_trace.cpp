@@ -145,29 +145,5 @@ int main(int argc, char** argv) {
         }
     }
 
-    // d. scaling.
-    {
-        std::ofstream csv(out + "/scaling.csv");
-        csv << "camera_pixels_per_side,samples_per_pixel,paths,render_seconds,nnz,matrix_bytes,peak_rss_mb\n";
-        std::printf("\nd. scaling (refined)\n%8s %6s %12s %10s %12s %12s %12s\n", "camera", "spp", "paths", "seconds", "nnz",
-                    "T MB", "peak RSS MB");
-        const std::vector<std::pair<int, int>> configs =
-            quick ? std::vector<std::pair<int, int>>{{50, 16}, {100, 16}}
-                  : std::vector<std::pair<int, int>>{{100, 16}, {100, 64}, {100, 256}, {50, 64}, {200, 64}};
-        for (auto [n, s] : configs) {
-            const Setup sc = setup(paper_scene(n, s));
-            const Tracer t(sc.scene, sc.solid);
-            RenderOptions ro;
-            ro.threads = threads;
-            const RenderResult r = render(t, ro);
-            rusage ru{};
-            getrusage(RUSAGE_SELF, &ru);
-            const double bytes = r.T.nnz() * 8.0 + r.T.indptr.size() * 8.0;
-            std::printf("%8d %6d %12llu %10.3f %12zu %12.2f %12.1f\n", n, s, static_cast<unsigned long long>(r.stats.paths),
-                        r.seconds, r.T.nnz(), bytes / 1e6, ru.ru_maxrss / 1024.0);
-            csv << n << "," << s << "," << r.stats.paths << "," << r.seconds << "," << r.T.nnz() << "," << bytes << ","
-                << ru.ru_maxrss / 1024.0 << "\n";
-        }
-    }
     return 0;
 }

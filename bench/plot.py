@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""Plots the tracing benchmark's CSV files (bench_trace --out DIR) as PNG images in DIR.
+"""Plots the tracing benchmarks' CSV files (bench_trace, bench_scale --out DIR) as PNG images in DIR.
 
 error_vs_time.png: render time against display-hit error over tessellation levels, with and
-without refinement, and the analytic representation. scaling.png: time against paths.
+without refinement, and the analytic representation. scaling.png: time against paths and the
+render's own peak RSS growth against nonzeros (bench_scale).
 grin_error_vs_time.png: display-hit error of a TetGen-meshed inclusion against meshing and tracing
 time over index tolerances (bench_grin).
 Needs Debian's python3-matplotlib.
@@ -35,18 +36,28 @@ ax.legend()
 fig.tight_layout()
 fig.savefig(f"{folder}/error_vs_time.png", dpi=120)
 
-rows = list(csv.DictReader(open(f"{folder}/scaling.csv")))
-fig, ax = plt.subplots(figsize=(7, 4.5))
+rows = [r for r in csv.DictReader(open(f"{folder}/scaling.csv")) if r["streamed"] == "0"]
+fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.5))
 x = [float(r["paths"]) for r in rows]
 y = [float(r["render_seconds"]) for r in rows]
 ax.loglog(x, y, "o")
 for r, xi, yi in zip(rows, x, y):
-    ax.annotate(f'{r["camera_pixels_per_side"]}^2 x {r["samples_per_pixel"]}, T {float(r["matrix_bytes"]) / 1e6:.1f} MB',
-                (xi, yi), textcoords="offset points", xytext=(4, -10), fontsize=7)
+    ax.annotate(f'{r["camera_pixels_per_side"]}^2 x {r["samples_per_pixel"]}', (xi, yi), textcoords="offset points",
+                xytext=(4, -10), fontsize=7)
 ax.set_xlabel("paths")
 ax.set_ylabel("render time (s)")
-ax.set_title("Scaling with samples per pixel and camera resolution")
+ax.set_title("Time against paths")
 ax.grid(True, which="both", alpha=0.3)
+n = [float(r["nnz"]) for r in rows]
+g = [float(r["rss_growth_bytes"]) / 1e6 for r in rows]
+t = [float(r["matrix_bytes"]) / 1e6 for r in rows]
+bx.loglog(n, g, "o", label="render's peak RSS growth")
+bx.loglog(n, t, "x", label="T's arrays (8 B/nonzero + 8 B/row)")
+bx.set_xlabel("nonzeros of T")
+bx.set_ylabel("MB")
+bx.set_title(f'Memory against nonzeros ({rows[0]["display_pixels_per_side"]}^2 display)')
+bx.grid(True, which="both", alpha=0.3)
+bx.legend()
 fig.tight_layout()
 fig.savefig(f"{folder}/scaling.png", dpi=120)
 
