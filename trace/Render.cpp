@@ -293,14 +293,16 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         return 8.0 * static_cast<double>(held_indices.size()) + 8.0 * static_cast<double>(indptr.size());
     };
     // Hands the held rows [sent_rows, indptr.size() - 1 + sent_rows) to the sink in pieces of at
-    // most one chunk of entries, and keeps none.
+    // most kPiece entries (a wave's worth; a longer row goes alone), and keeps none: copying what
+    // was held when the budget was reached costs 2 MiB beyond it, not a second copy of it.
+    constexpr std::int64_t kPiece = std::int64_t(1) << 18;
     const auto send_held = [&] {
         const std::int64_t rows_held = static_cast<std::int64_t>(indptr.size()) - 1;
         std::int64_t r0 = 0;
         while (r0 < rows_held) {
             std::int64_t r1 = r0 + 1;
             while (r1 < rows_held && indptr[static_cast<size_t>(r1 + 1)] - indptr[static_cast<size_t>(r0)] <=
-                                         static_cast<std::int64_t>(ChunkedArray<float>::kChunk))
+                                         kPiece)
                 ++r1;
             const auto from = static_cast<size_t>(indptr[static_cast<size_t>(r0)]);
             const auto n = static_cast<size_t>(indptr[static_cast<size_t>(r1)]) - from;
