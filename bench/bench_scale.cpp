@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
     const bench::Args args = bench::parse_args(argc, argv);
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(args.threads));
     const std::vector<std::pair<int, int>> configs =
-        args.quick ? std::vector<std::pair<int, int>>{{100, 16}, {250, 16}, {500, 4}, {500, 16}, {700, 16}}
+        args.quick ? std::vector<std::pair<int, int>>{{100, 16}, {250, 16}, {500, 4}, {500, 16}, {600, 8}}
                    : std::vector<std::pair<int, int>>{{100, 16}, {250, 16}, {500, 4}, {500, 16}, {700, 16},
                                                       {1000, 4}, {1000, 8}, {1000, 16}};
 
@@ -86,19 +86,19 @@ int main(int argc, char** argv) {
                 kDisplay, args.threads, probe.method().c_str());
     if (!probe.per_run())
         std::printf("WARNING: the peak RSS column is process-wide and monotone here (upper bounds, not per run)\n");
-    std::printf("%6s %4s %10s %8s %10s %9s %9s %9s %9s %9s\n", "camera", "spp", "Mpaths", "seconds", "Mnnz", "T MB",
-                "peak MB", "growth MB", "B/nnz", "s/Mpath");
+    std::printf("%6s %4s %10s %8s %10s %9s %9s %9s %9s %8s %9s\n", "camera", "spp", "Mpaths", "seconds", "Mnnz", "T MB",
+                "peak MB", "growth MB", "B/nnz", "growth/T", "s/Mpath");
 
     std::ofstream csv(args.out + "/scaling.csv");
     csv << "camera_pixels_per_side,samples_per_pixel,display_pixels_per_side,paths,render_seconds,nnz,matrix_bytes,"
-           "peak_rss_bytes,rss_growth_bytes,bytes_per_nnz,seconds_per_mpath,streamed,max_matrix_bytes\n";
+           "peak_rss_bytes,rss_growth_bytes,bytes_per_nnz,growth_over_matrix_bytes,seconds_per_mpath,streamed,max_matrix_bytes\n";
     const auto print = [&](const Row& r, std::size_t budget) {
-        std::printf("%6d %4d %10.3f %8.3f %10.3f %9.1f %9.1f %9.1f %9.2f %9.3f%s\n", r.n, r.spp, r.paths / 1e6, r.seconds,
-                    r.nnz / 1e6, r.matrix_bytes / 1e6, r.peak / 1e6, r.growth / 1e6, r.growth / r.nnz,
-                    r.seconds / (r.paths / 1e6), r.streamed ? "  (streamed)" : "");
+        std::printf("%6d %4d %10.3f %8.3f %10.3f %9.1f %9.1f %9.1f %9.2f %8.3f %9.3f%s\n", r.n, r.spp, r.paths / 1e6,
+                    r.seconds, r.nnz / 1e6, r.matrix_bytes / 1e6, r.peak / 1e6, r.growth / 1e6, r.growth / r.nnz,
+                    r.growth / r.matrix_bytes, r.seconds / (r.paths / 1e6), r.streamed ? "  (streamed)" : "");
         csv << r.n << "," << r.spp << "," << kDisplay << "," << r.paths << "," << r.seconds << "," << r.nnz << ","
             << r.matrix_bytes << "," << r.peak << "," << r.growth << "," << r.growth / r.nnz << ","
-            << r.seconds / (r.paths / 1e6) << "," << (r.streamed ? 1 : 0) << "," << budget << "\n";
+            << r.growth / r.matrix_bytes << "," << r.seconds / (r.paths / 1e6) << "," << (r.streamed ? 1 : 0) << "," << budget << "\n";
     };
 
     // One render of an n x n camera at spp, its own peak measured; with a sink, streamed above
@@ -143,9 +143,20 @@ int main(int argc, char** argv) {
         tmin = std::min(tmin, r.seconds / (r.paths / 1e6));
         tmax = std::max(tmax, r.seconds / (r.paths / 1e6));
     }
-    std::printf("\nmemory ~ nnz: growth = %.2f bytes x nnz (least squares through 0; T's arrays: 8 per nonzero + 8 per row); "
-                "per row %.2f .. %.2f bytes/nnz\n",
-                a, bmin, bmax);
+    // And with an intercept: growth = a1 nnz + b1, the fixed part (a wave's buffers, the chunk
+    // being filled) apart from the proportional one.
+    double sn = 0, sg = 0, snn = 0, sng = 0;
+    for (const Row& r : rows) {
+        sn += r.nnz;
+        sg += r.growth;
+        snn += r.nnz * r.nnz;
+        sng += r.nnz * r.growth;
+    }
+    const double m = static_cast<double>(rows.size());
+    const double a1 = (m * sng - sn * sg) / (m * snn - sn * sn), b1 = (sg - a1 * sn) / m;
+    std::printf("\nmemory ~ nnz: growth = %.2f bytes x nnz (least squares through 0); = %.2f bytes x nnz + %.2f MB (with "
+                "an intercept); T's arrays: 8 per nonzero + 8 per row; per row %.2f .. %.2f bytes/nnz\n",
+                a, a1, b1 / 1e6, bmin, bmax);
     std::printf("time ~ paths: seconds = %.3f s x Mpaths (least squares through 0); per row %.3f .. %.3f s/Mpath\n", c * 1e6,
                 tmin, tmax);
 
