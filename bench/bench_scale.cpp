@@ -17,8 +17,10 @@
 // ltm.npz (io::LtmFileStream, spill files in --out), to show that T is then never whole in memory:
 // its growth stays near the budget while T itself is far larger.
 //
-// Usage: bench_scale [--threads N] [--out DIR] [--quick]
-//   --quick: the smaller rows only (under ~20 s on 2 threads); CSV: DIR/scaling.csv.
+// Usage: bench_scale [--threads N] [--reps R] [--out DIR] [--quick]
+//   --quick: the smaller rows only (under ~20 s on 2 threads); --reps R (default 1): seconds are
+//   the median of R renders of each row, taken round the rows (the streamed one runs once); CSV:
+//   DIR/scaling.csv.
 #include <malloc.h>
 #include <tbb/global_control.h>
 
@@ -70,7 +72,9 @@ double slope(const std::vector<Row>& rows, double Row::*x, double Row::*y) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    const bench::Args args = bench::parse_args(argc, argv);
+    bench::Args defaults;
+    defaults.reps = 1;  // --reps R: each row rendered R times, seconds their median
+    const bench::Args args = bench::parse_args(argc, argv, defaults);
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(args.threads));
     const std::vector<std::pair<int, int>> configs =
         args.quick ? std::vector<std::pair<int, int>>{{100, 16}, {250, 16}, {500, 4}, {500, 16}, {600, 8}}
@@ -116,6 +120,7 @@ int main(int argc, char** argv) {
         ::malloc_trim(0);
         const io::PeakRssMeter meter;
         const RenderResult r = render(tracer, ro);
+        const std::uint64_t peak = meter.peak_bytes(), growth = meter.growth_bytes();
         Row row;
         row.n = n;
         row.spp = spp;
@@ -123,16 +128,26 @@ int main(int argc, char** argv) {
         row.seconds = r.seconds;
         row.nnz = static_cast<double>(r.nnz);
         row.matrix_bytes = 8.0 * row.nnz + 8.0 * (static_cast<double>(n) * n + 1);
-        row.peak = static_cast<double>(meter.peak_bytes());
-        row.growth = static_cast<double>(meter.growth_bytes());
+        row.peak = static_cast<double>(peak);
+        row.growth = static_cast<double>(growth);
         row.streamed = r.streamed;
         return row;
     };
 
-    std::vector<Row> rows;
-    for (auto [n, spp] : configs) {
-        rows.push_back(run(n, spp, nullptr, 0));
-        print(rows.back(), 0);
+    // Repetitions go round the rows (row 1, 2, ..., then again), so that a change in the machine's
+    // load during the run hits every row alike; a row's seconds are the median of its renders, its
+    // memory that of the first (the renders are identical).
+    std::vector<Row> rows(configs.size());
+    std::vector<std::vector<double>> times(configs.size());
+    for (int rep = 0; rep < std::max(1, args.reps); ++rep)
+        for (size_t i = 0; i < configs.size(); ++i) {
+            const Row row = run(configs[i].first, configs[i].second, nullptr, 0);
+            if (rep == 0) rows[i] = row;
+            times[i].push_back(row.seconds);
+        }
+    for (size_t i = 0; i < configs.size(); ++i) {
+        rows[i].seconds = bench::median(times[i]);
+        print(rows[i], 0);
     }
 
     const double a = slope(rows, &Row::nnz, &Row::growth), c = slope(rows, &Row::paths, &Row::seconds);
