@@ -16,9 +16,10 @@
 // once into RenderResult::T at the end, each copied stretch's pages released right behind the
 // copy. So the peak is T's own size (8 bytes per nonzero, 8 per row) plus one wave's rows and a
 // few MiB: no per-row containers, no doubling vectors, no second copy of T.
-// With a row sink and a budget (RenderOptions::row_sink, max_matrix_bytes), T never exceeds the
-// budget in memory: once what it holds would, the render hands its rows to the sink block by
-// block, in row order, and keeps none (streaming; e.g. ltm.npz written from the blocks).
+// With a row sink and a budget (RenderOptions::row_sink, max_matrix_bytes), T exceeds the budget
+// in memory by at most one wave: once what it holds does, the render hands its rows to the sink
+// block by block, in row order, and from then on keeps only the current wave (streaming; e.g.
+// ltm.npz written from the blocks).
 //
 // Threads: render() keeps no process-wide thread state. With options.threads = n > 0 it runs in a
 // task arena of its own with n threads; with 0 it runs in the caller's arena (all cores when the
