@@ -15,6 +15,7 @@
 #include "features/BlockProduct.h"
 #include "features/Features.h"
 #include "io/CsrMatrix.h"
+#include "tests/TestSupport.h"
 
 using namespace ltm;
 
@@ -55,14 +56,7 @@ bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const std::invalid_argument& e) {
-        return e.what();
-    }
-    return "(no exception)";
-}
+std::string error_of(const std::function<void()>& f) { return ltm::test::message_of<std::invalid_argument>(f); }
 
 }  // namespace
 
