@@ -17,6 +17,7 @@
 // caller is in none), so several renders can share one arena concurrently (the dataset command
 // renders several samples at once this way).
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "io/CsrMatrix.h"
@@ -54,8 +55,21 @@ struct RenderResult {
     bool tracked_defects = false;
     std::vector<DefectPaths> defect_paths;
     PathStats stats;
-    double seconds = 0;
+    double seconds = 0;        // the whole render: trace_seconds + merge_seconds
+    double trace_seconds = 0;  // tracing the paths and merging each row's samples (in parallel)
+    double merge_seconds = 0;  // assembling the rows into the CSR matrix (serial)
 };
+
+// One path branch's contribution to a row, before the row is merged.
+struct RowEntry {
+    std::int32_t column;
+    double weight;
+};
+// Appends the merged row to `row`: one entry per distinct column of `entries`, the weights summed
+// in the order they come (a stable sort by column keeps sample order, so the sum, and the float
+// it rounds to, does not depend on threads) and divided by the samples per pixel. Reorders
+// `entries`.
+void merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::pair<std::int32_t, float>>& row);
 
 RenderResult render(const Tracer& tracer, const RenderOptions& options);
 
