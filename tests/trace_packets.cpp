@@ -107,7 +107,9 @@ TEST(Packets, RefinedAndMeshOnlyUsePacketsAndMatchSingleRaysBitForBit) {
             const PathStats s = expect_packets_match(t, size);
             EXPECT_GT(s.packet_segments, 0u);
             // Every first segment went one of the two ways (a partial packet of one goes alone).
-            if (size == Tracer::kPacket) EXPECT_EQ(s.packet_segments + s.packet_fallbacks, s.paths);
+            if (size == Tracer::kPacket) {
+                EXPECT_EQ(s.packet_segments + s.packet_fallbacks, s.paths);
+            }
         }
     }
 }

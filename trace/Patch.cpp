@@ -37,6 +37,7 @@ std::vector<Patch> object_patches(const Lens& lens) {
 void Patch::finalize() {
     constexpr double slack = 8 * std::numeric_limits<double>::epsilon();
     rho2_max = (a * (1 + slack)) * (a * (1 + slack));
+    rho2_inside = (a * (1 - trace_tol::kRimInsideMargin)) * (a * (1 - trace_tol::kRimInsideMargin));
     const double zs = slack * (std::fabs(z_lo) + std::fabs(z_hi) + a);
     z_min = z_lo - zs;
     z_max = z_hi + zs;

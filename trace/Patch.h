@@ -26,6 +26,7 @@ struct Patch {
     // Precomputed by finalize(): the boundary tests' limits, with a few ulps of slack, and the
     // box a segment must meet for the patch to be solved (bounds inflated by kCullMargin).
     double rho2_max = 0, z_min = 0, z_max = 0;
+    double rho2_inside = 0;  // rim: (a (1 - kRimInsideMargin))^2
     Aabb cull;
     void finalize();
 };
@@ -47,8 +48,18 @@ inline bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const A
     return true;
 }
 
-// Whether patch_hit(p, o, d, 0, tmax) can find a root at all (conservative: see kCullMargin).
+// Whether patch_hit(p, o, d, 0, tmax) can find a root at all (conservative: see kCullMargin and
+// kRimInsideMargin in TraceTolerance.h).
 inline bool may_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {
+    if (p.kind == Patch::Kind::Rim && tmax < INFINITY) {
+        // Both ends inside the cylinder by the margin: a convex set, so no crossing between.
+        const auto rho2 = [&](const Vec3& x) {
+            const Vec3 v = x - p.surface.origin;
+            const double h = dot(v, p.surface.axis);
+            return dot(v, v) - h * h;
+        };
+        if (rho2(o) < p.rho2_inside && rho2(o + d * tmax) < p.rho2_inside) return false;
+    }
     return p.cull.empty() || segment_meets_box(o, d, tmax, p.cull);
 }
 

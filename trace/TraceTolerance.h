@@ -47,6 +47,12 @@ inline constexpr double kSpawnMinCos = 1e-3;
 // the cull never drops a root the solve would have returned (results are bit-identical with and
 // without it) and still rejects every patch the segment misses by more than ~1e-8 mm.
 inline constexpr double kCullMargin = 1e-9;
+// The rim (a cylinder of radius a) is not solved for a segment whose both ends lie inside it by
+// kRimInsideMargin a in radius: the set inside a cylinder is convex, so the segment cannot cross
+// it, and its line passes the axis within a (1 - m), so the quadratic's discriminant is at least
+// ~2 m a^2 and its computed roots err by ~u a / sqrt(2 m) ~ 1.6e-13 a for m = 1e-6, far less than
+// their distance m a from the ends: no root the solve would return lies in the segment.
+inline constexpr double kRimInsideMargin = 1e-6;
 
 // ---- The exact guard (Tracer::exact_guard, Tracer::on_glass_boundary) ------------------------------
 // A root of a cutter's surface is a crossing of the glass boundary where membership of the cutter
