@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "acquire/Recovery.h"
+#include "features/BlockProduct.h"
 
 namespace ltm::acquire {
 
@@ -39,45 +40,32 @@ constexpr long kMaxCandidates = 16384;
 Measurements simulate(const CsrMatrix& T, const PatternBlock& X, const SensorModel& sensor, int first_pattern,
                       int threads) {
     if (T.cols != X.pixels()) throw std::invalid_argument("simulate: the patterns do not cover T's display pixels");
-    const std::string problem = T.check();
-    if (!problem.empty()) throw std::invalid_argument("simulate: " + problem);
-    const int K = X.K;
+    const int K = X.K;  // T itself is checked by the block product
+    const double b = sensor.display.black_level;
     Measurements y;
     y.pixels = T.rows;
     y.K = K;
-    y.values.assign(static_cast<std::size_t>(T.rows) * K, 0.0);
-    const double b = sensor.display.black_level;
-    // Grey blocks: the radiance of every command value, once.
-    std::vector<double> radiance;
-    if (!X.binary) {
-        radiance.resize(X.values.size());
+    // The noise-free radiances, one pass over T for the whole block (features/BlockProduct.h).
+    // A binary pattern's radiance is b + (1 - b) [on]: the product sums the lit entries only and
+    // b times the row sum is added below. A grey block is multiplied by the radiance of every
+    // command value, tabulated once.
+    if (X.binary) {
+        y.values = multiply_block_binary(T, X.bits, X.words, K, threads);
+    } else {
+        std::vector<double> radiance(X.values.size());
         for (std::size_t i = 0; i < X.values.size(); ++i) radiance[i] = display_radiance(sensor.display, X.values[i]);
+        y.values = multiply_block(T, radiance, K, threads);
     }
+    // The measurements, in place: each (pattern, pixel) draws from its own stream.
     in_arena(threads, [&] {
         tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, T.rows, 16), [&](const tbb::blocked_range<std::int64_t>& r) {
-            std::vector<double> acc(static_cast<std::size_t>(K));
             for (std::int64_t k = r.begin(); k != r.end(); ++k) {
-                std::fill(acc.begin(), acc.end(), 0.0);
                 double row_sum = 0;
-                for (std::int64_t i = T.indptr[k]; i < T.indptr[k + 1]; ++i) {
-                    const long l = T.indices[i];
-                    const double v = T.data[i];
-                    row_sum += v;
-                    if (X.binary) {
-                        // A binary pattern's radiance is b + (1 - b) [on]: sum the lit entries only.
-                        const std::uint64_t* w = &X.bits[static_cast<std::size_t>(l) * X.words];
-                        for (int word = 0; word < X.words; ++word)
-                            for (std::uint64_t m = w[word]; m; m &= m - 1)
-                                acc[static_cast<std::size_t>(word * 64 + __builtin_ctzll(m))] += v;
-                    } else {
-                        const double* L = &radiance[static_cast<std::size_t>(l) * K];
-                        for (int j = 0; j < K; ++j) acc[static_cast<std::size_t>(j)] += v * L[j];
-                    }
-                }
+                if (X.binary)
+                    for (std::int64_t i = T.indptr[k]; i < T.indptr[k + 1]; ++i) row_sum += T.data[i];
                 double* out = &y.values[static_cast<std::size_t>(k) * K];
                 for (int j = 0; j < K; ++j) {
-                    const double radiance_kj = X.binary ? b * row_sum + (1 - b) * acc[static_cast<std::size_t>(j)]
-                                                        : acc[static_cast<std::size_t>(j)];
+                    const double radiance_kj = X.binary ? b * row_sum + (1 - b) * out[j] : out[j];
                     CounterRng rng(sensor.seed, static_cast<std::uint64_t>(first_pattern + j), static_cast<std::uint64_t>(k));
                     out[j] = measure(sensor, radiance_kj, rng);
                 }

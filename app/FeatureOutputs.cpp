@@ -45,6 +45,8 @@ io::Json stats_json(const PathStats& s) {
             {"leaks_unresolved", s.leaks_unresolved},
             {"seam_repairs", s.seam_repairs},
             {"edge_chords", s.edge_chords},
+            {"packet_segments", s.packet_segments},
+            {"packet_fallbacks", s.packet_fallbacks},
             {"grin_segments", s.grin_segments},
             {"grin_evaluations", s.grin_evaluations},
             {"tet_crossings", s.tet_crossings},

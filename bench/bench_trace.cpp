@@ -5,10 +5,10 @@
 //      mesh (the segments of real paths, recorded, then replayed), same threads: efficiency a/b;
 //   c. display-hit error against the analytic reference and render time over tessellation levels,
 //      with and without refinement, and for the analytic primitives (CSV: error_vs_time.csv);
-//   d. time and memory against samples per pixel and camera resolution (CSV: scaling.csv).
+// (Time and memory against resolution and samples per pixel: bench_scale.cpp.)
 // Usage: bench_trace [--threads N] [--reps R] [--out DIR] [--quick]
-//   --quick: a and b only, at 64 spp, ending with the ratio table (scripts/bench --quick).
-#include <sys/resource.h>
+//   --quick: a and b only, at 64 spp, ending with the ratio table and where the time goes
+//   (scripts/bench --quick).
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "bench/BenchSupport.h"
+#include "bench/StageBreakdown.h"
 #include "scene/SceneLoader.h"
 #include "trace/Render.h"
 #include "validation/AnalyticScene.h"
@@ -105,7 +106,21 @@ int main(int argc, char** argv) {
         std::printf("%-12s %12.3f %8.2f %8s\n", "mesh-only", mesh_seg_rate / 1e6, mesh_seg_rate / raw_rate, ">= 1.5");
         std::printf("%-12s %12.3f %8.2f\n\n", "bare", raw_rate / 1e6, 1.0);
     }
-    if (quick) return 0;  // scripts/bench --quick: the ratio table only
+    {
+        // Where the time goes: each stage replayed alone on one thread (bench/StageBreakdown.h).
+        std::printf("where the time goes: one-thread render, %d spp, per path (bench/StageBreakdown.h)\n", spp);
+        TracerOptions mo;
+        mo.representation = Representation::MeshOnly;
+        const Tracer mesh(paper.scene, paper.solid, mo);
+        for (auto rep : {Representation::Analytic, Representation::Refined, Representation::MeshOnly}) {
+            TracerOptions o;
+            o.representation = rep;
+            const Tracer t(paper.scene, paper.solid, o);
+            bench::print_stage_breakdown(to_string(rep), bench::stage_breakdown(t, mesh, reps, out + "/stage-write"));
+        }
+        std::printf("\n");
+    }
+    if (quick) return 0;  // scripts/bench --quick: the ratio table and the breakdown only
 
     // c. error vs time.
     {

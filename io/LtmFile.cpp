@@ -452,31 +452,14 @@ private:
     std::uint64_t done_ = 0;
 };
 
-std::uint64_t load_uint(const std::uint8_t* p, std::size_t size, bool big) {
-    std::uint64_t v = 0;
-    for (std::size_t b = 0; b < size; ++b) {
-        const std::uint8_t byte = big ? p[b] : p[size - 1 - b];
-        v = (v << 8) | byte;
-    }
-    return v;
-}
+using io::npy_load_float;
+using io::npy_load_uint;
+
 std::int64_t load_int(const std::uint8_t* p, std::size_t size, bool big) {
-    const std::uint64_t u = load_uint(p, size, big);
+    const std::uint64_t u = npy_load_uint(p, size, big);
     if (size == 8) return static_cast<std::int64_t>(u);
     const std::uint64_t sign = std::uint64_t(1) << (8 * size - 1);
     return static_cast<std::int64_t>((u ^ sign)) - static_cast<std::int64_t>(sign);
-}
-double load_float(const std::uint8_t* p, std::size_t size, bool big) {
-    const std::uint64_t u = load_uint(p, size, big);
-    if (size == 4) {
-        const auto u32 = static_cast<std::uint32_t>(u);
-        float f;
-        std::memcpy(&f, &u32, 4);
-        return f;
-    }
-    double d;
-    std::memcpy(&d, &u, 8);
-    return d;
 }
 
 // Reads one array entry; `on_header` validates dtype and shape (throwing), `on_elements` converts.
@@ -515,7 +498,7 @@ CsrMatrix read_npz(const Archive& zip) {
                         if (p[i]) format.push_back(static_cast<char>(p[i]));
                 } else {
                     for (std::size_t i = 0; i + 4 <= fi.itemsize; i += 4) {
-                        const auto c = static_cast<std::uint32_t>(load_uint(p + i, 4, fi.big_endian));
+                        const auto c = static_cast<std::uint32_t>(npy_load_uint(p + i, 4, fi.big_endian));
                         if (c) format.push_back(c < 128 ? static_cast<char>(c) : '?');
                     }
                 }
@@ -541,9 +524,9 @@ CsrMatrix read_npz(const Archive& zip) {
             [&](const std::uint8_t* p, std::size_t count) {
                 for (std::size_t i = 0; i < count; ++i) {
                     const std::uint8_t* q = p + i * si.itemsize;
-                    if (si.kind == 'u' && si.itemsize == 8 && load_uint(q, 8, si.big_endian) > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
+                    if (si.kind == 'u' && si.itemsize == 8 && npy_load_uint(q, 8, si.big_endian) > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
                         bad("matrix shape entry too large in 'shape.npy'");
-                    shape.push_back(si.kind == 'u' ? static_cast<std::int64_t>(load_uint(q, si.itemsize, si.big_endian))
+                    shape.push_back(si.kind == 'u' ? static_cast<std::int64_t>(npy_load_uint(q, si.itemsize, si.big_endian))
                                                    : load_int(q, si.itemsize, si.big_endian));
                 }
             });
@@ -626,7 +609,7 @@ CsrMatrix read_npz(const Archive& zip) {
                     return;
                 }
                 for (std::size_t i = 0; i < count; ++i) {
-                    const double v = load_float(p + i * di.itemsize, di.itemsize, di.big_endian);
+                    const double v = npy_load_float(p + i * di.itemsize, di.itemsize, di.big_endian);
                     const auto fv = static_cast<float>(v);
                     if (std::isfinite(v) && !std::isfinite(fv))
                         bad("value " + std::to_string(v) + " of nonzero " + std::to_string(T.data.size()) +

@@ -1,8 +1,11 @@
 #include "io/Npy.h"
 
 #include <cctype>
+#include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 namespace ltm::io {
 
@@ -188,6 +191,91 @@ NpyHeader parse_npy_preamble(std::string_view preamble) {
         h.count *= s;
     }
     return h;
+}
+
+std::uint64_t npy_load_uint(const std::uint8_t* p, std::size_t size, bool big_endian) {
+    std::uint64_t v = 0;
+    for (std::size_t b = 0; b < size; ++b) {
+        const std::uint8_t byte = big_endian ? p[b] : p[size - 1 - b];
+        v = (v << 8) | byte;
+    }
+    return v;
+}
+
+double npy_load_float(const std::uint8_t* p, std::size_t size, bool big_endian) {
+    const std::uint64_t u = npy_load_uint(p, size, big_endian);
+    if (size == 4) {
+        const auto u32 = static_cast<std::uint32_t>(u);
+        float f;
+        std::memcpy(&f, &u32, 4);
+        return f;
+    }
+    double d;
+    std::memcpy(&d, &u, 8);
+    return d;
+}
+
+bool is_npy_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char magic[6] = {};
+    return in.read(magic, 6) && std::memcmp(magic, "\x93NUMPY", 6) == 0;
+}
+
+NpyFloatArray read_npy_floats(const std::string& path) {
+    auto fail = [&](const std::string& why) -> void { throw std::runtime_error("cannot read npy file '" + path + "': " + why); };
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(std::strerror(errno));
+    // One read of the whole file (a 64-pattern stack of a 500 x 500 display is 64 MB; a stream
+    // iterator took most of a second for it).
+    in.seekg(0, std::ios::end);
+    const std::streamoff size = in.tellg();
+    in.seekg(0, std::ios::beg);
+    if (size < 0) fail("cannot tell its size");
+    std::string bytes(static_cast<std::size_t>(size), '\0');
+    if (!in.read(bytes.data(), size)) fail("read error");
+    NpyHeader h;
+    try {
+        // The preamble's size in steps (npy_preamble_size): until it no longer changes.
+        std::size_t want = 0;
+        for (std::size_t next; (next = npy_preamble_size(std::string_view(bytes).substr(0, want))) != want; want = next)
+            if (next > bytes.size()) fail("truncated .npy header (the file has " + std::to_string(bytes.size()) + " bytes)");
+        h = parse_npy_preamble(std::string_view(bytes).substr(0, want));
+    } catch (const NpyError& e) {
+        fail(e.what());
+    }
+    if (h.kind != 'f' || (h.itemsize != 4 && h.itemsize != 8))
+        fail("dtype '" + h.descr + "' is not float32 or float64");
+    const std::uint64_t payload = bytes.size() - h.preamble_size;
+    if (h.count > payload / h.itemsize || h.count * h.itemsize != payload)
+        fail("its shape " + npy_shape_repr(h.shape) + " needs " + std::to_string(h.count) + " elements of " +
+             std::to_string(h.itemsize) + " bytes, but it holds " + std::to_string(payload) + " bytes of data");
+    NpyFloatArray a;
+    a.shape = h.shape;
+    a.values.resize(static_cast<std::size_t>(h.count));
+    const auto* data = reinterpret_cast<const std::uint8_t*>(bytes.data()) + h.preamble_size;
+    // C-order element c sits at file element f: f = c in C order; in Fortran order the first index
+    // varies fastest, f = i0 + d0 (i1 + d1 (i2 + ...)), walked with an odometer over the C index.
+    const std::size_t n = h.shape.size();
+    std::vector<std::uint64_t> idx(n, 0), stride(n, 1);
+    for (std::size_t d = 1; d < n; ++d) stride[d] = stride[d - 1] * h.shape[d - 1];
+    if (!h.fortran_order && h.itemsize == 4 && h.big_endian != kHostLittle) {  // as it sits in memory
+        if (h.count > 0) std::memcpy(a.values.data(), data, static_cast<std::size_t>(h.count) * 4);
+        return a;
+    }
+    std::uint64_t f = 0;
+    for (std::uint64_t c = 0; c < h.count; ++c) {
+        const std::uint64_t at = h.fortran_order ? f : c;
+        a.values[static_cast<std::size_t>(c)] =
+            static_cast<float>(npy_load_float(data + at * h.itemsize, h.itemsize, h.big_endian));
+        if (h.fortran_order)
+            for (std::size_t d = n; d-- > 0;) {  // C order: the last index is incremented first
+                f += stride[d];
+                if (++idx[d] < h.shape[d]) break;
+                f -= stride[d] * h.shape[d];
+                idx[d] = 0;
+            }
+    }
+    return a;
 }
 
 }  // namespace ltm::io

@@ -65,4 +65,26 @@ std::size_t npy_preamble_size(std::string_view head);
 // Parses a complete preamble (npy_preamble_size(preamble) == preamble.size()). Throws NpyError.
 NpyHeader parse_npy_preamble(std::string_view preamble);
 
+// One element as a file holds it: an unsigned integer of `size` bytes (1..8), or an IEEE float of
+// 4 or 8 bytes, big- or little-endian; the result converted exactly (a float32 widened to double).
+std::uint64_t npy_load_uint(const std::uint8_t* p, std::size_t size, bool big_endian);
+double npy_load_float(const std::uint8_t* p, std::size_t size, bool big_endian);
+
+// True if the file at `path` starts with the .npy magic "\x93NUMPY" (false if it cannot be read):
+// how a reader tells a .npy from an image, by its first bytes and never by the extension.
+bool is_npy_file(const std::string& path);
+
+// A whole .npy file of floating-point numbers, such as numpy.save writes for a user's data (a
+// stack of display patterns): dtype float32 or float64 in either byte order ('<f4', '>f4', '<f8',
+// '>f8'), C or Fortran order, any shape. `values` is in C order (the last index varies fastest;
+// a Fortran-order file is reordered), float64 rounded to the nearest float (beyond float's range:
+// +-inf; the caller checks finiteness where it matters). Throws std::runtime_error
+// "cannot read npy file 'PATH': reason" for a missing or unreadable file, a bad preamble, another
+// dtype, or data shorter or longer than the shape says.
+struct NpyFloatArray {
+    std::vector<std::uint64_t> shape;
+    std::vector<float> values;
+};
+NpyFloatArray read_npy_floats(const std::string& path);
+
 }  // namespace ltm::io

@@ -68,12 +68,13 @@ inline void spit(const std::filesystem::path& p, const std::string& bytes) {
 
 // ---- exceptions ------------------------------------------------------------------------------
 
-// The message of the std::runtime_error (or subclass) that f throws, "(no exception)" when it
-// throws none; other exceptions pass through.
-inline std::string message_of(const std::function<void()>& f) {
+// The message of the E (std::runtime_error unless given, or a subclass) that f throws,
+// "(no exception)" when it throws none; other exceptions pass through.
+template <class E = std::runtime_error>
+std::string message_of(const std::function<void()>& f) {
     try {
         f();
-    } catch (const std::runtime_error& e) {
+    } catch (const E& e) {
         return e.what();
     }
     return "(no exception)";

@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -213,3 +216,64 @@ TEST(Npy, MalformedHeadersAreRefusedWithTheirReason) {
 }
 
 }  // namespace
+
+// read_npy_floats (a whole .npy of floats, e.g. a user's stack of display patterns): float32 and
+// float64, either byte order, C and Fortran order, all give the same values in C order; other
+// dtypes, short or long data and a broken preamble are refused naming the file.
+TEST(NpyFile, ReadsFloatsOfBothWidthsByteOrdersAndLayouts) {
+    const std::filesystem::path dir = ltm::test::make_test_dir();
+    // A (2, 3) array a[i][j] = 10 i + j - 0.5 (exact in float): C order 0..5 is
+    // -0.5, 0.5, 1.5, 9.5, 10.5, 11.5; Fortran order stores a[0][0], a[1][0], a[0][1], ...
+    const std::vector<double> c = {-0.5, 0.5, 1.5, 9.5, 10.5, 11.5};
+    const std::vector<double> f = {-0.5, 9.5, 0.5, 10.5, 1.5, 11.5};
+    auto file = [&](const std::string& name, const std::string& descr, bool fortran, const std::vector<double>& v) {
+        const bool big = descr[0] == '>';
+        const std::size_t size = descr[2] == '8' ? 8 : 4;
+        std::string dict = "{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") +
+                           ", 'shape': (2, 3), }";
+        std::string bytes = with_prefix(1, dict + std::string(63 - (10 + dict.size()) % 64, ' ') + "\n");
+        for (double x : v) {
+            unsigned char raw[8];
+            if (size == 8) std::memcpy(raw, &x, 8);
+            else {
+                const float y = static_cast<float>(x);
+                std::memcpy(raw, &y, 4);
+            }
+            for (std::size_t b = 0; b < size; ++b) bytes.push_back(static_cast<char>(raw[big ? size - 1 - b : b]));
+        }
+        ltm::test::spit(dir / name, bytes);
+        return (dir / name).string();
+    };
+    const std::vector<float> expected(c.begin(), c.end());
+    for (const auto& [descr, fortran] : std::vector<std::pair<std::string, bool>>{
+             {"<f4", false}, {">f4", false}, {"<f8", false}, {">f8", false}, {"<f4", true}, {">f8", true}}) {
+        const std::string p = file("a.npy", descr, fortran, fortran ? f : c);
+        EXPECT_TRUE(ltm::io::is_npy_file(p));
+        const ltm::io::NpyFloatArray a = ltm::io::read_npy_floats(p);
+        EXPECT_EQ(a.shape, (std::vector<std::uint64_t>{2, 3})) << descr << fortran;
+        EXPECT_EQ(a.values, expected) << descr << fortran;
+    }
+    // float64 beyond float's range rounds to infinity (the caller checks finiteness).
+    EXPECT_TRUE(std::isinf(ltm::io::read_npy_floats(file("big.npy", "<f8", false, {1e300, 0, 0, 0, 0, 0})).values[0]));
+
+    const std::string ints = file("i.npy", "<i4", false, c);
+    EXPECT_NE(message_of([&] { ltm::io::read_npy_floats(ints); }).find("'" + ints + "': dtype '<i4' is not float32"),
+              std::string::npos);
+    std::string whole = ltm::test::slurp(file("s.npy", "<f4", false, c));
+    ltm::test::spit(dir / "short.npy", whole.substr(0, whole.size() - 1));
+    ltm::test::spit(dir / "long.npy", whole + "x");
+    ltm::test::spit(dir / "head.npy", whole.substr(0, 20));
+    for (const char* name : {"short.npy", "long.npy"})
+        EXPECT_NE(message_of([&] { ltm::io::read_npy_floats((dir / name).string()); })
+                      .find("needs 6 elements of 4 bytes, but it holds"),
+                  std::string::npos)
+            << name;
+    EXPECT_NE(message_of([&] { ltm::io::read_npy_floats((dir / "head.npy").string()); }).find("truncated .npy header"),
+              std::string::npos);
+    EXPECT_NE(message_of([&] { ltm::io::read_npy_floats((dir / "none.npy").string()); }).find("none.npy"),
+              std::string::npos);
+    ltm::test::spit(dir / "image.png", "\x89PNG\r\n\x1a\n");
+    EXPECT_FALSE(ltm::io::is_npy_file((dir / "image.png").string()));
+    EXPECT_FALSE(ltm::io::is_npy_file((dir / "none.npy").string()));
+    std::filesystem::remove_all(dir);
+}

@@ -93,7 +93,11 @@ void throw_on_error(RTCDevice device, const char* what) {
 
 }  // namespace
 
+// Geometry masks: single-ray queries (mask ~0) see both; packets see the triangles only.
+constexpr unsigned kTriangleMask = 1u, kPatchMask = 2u;
+
 struct EmbreeScene::Impl {
+    bool masks = false;  // the build honours ray masks
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     unsigned tri_geom = RTC_INVALID_GEOMETRY_ID, patch_geom = RTC_INVALID_GEOMETRY_ID;
@@ -108,6 +112,7 @@ EmbreeScene::EmbreeScene(const TriMesh* triangles, const std::vector<Patch>* pat
     m.patches = patches;
     m.device = rtcNewDevice("verbose=0");
     if (!m.device) throw std::runtime_error("Embree: cannot create a device");
+    m.masks = rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
     m.scene = rtcNewScene(m.device);
     rtcSetSceneFlags(m.scene, static_cast<RTCSceneFlags>((robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE) |
                                                          RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION));
@@ -125,6 +130,7 @@ EmbreeScene::EmbreeScene(const TriMesh* triangles, const std::vector<Patch>* pat
                                                                    3 * sizeof(unsigned), triangles->num_triangles()));
         for (size_t f = 0; f < triangles->num_triangles(); ++f)
             for (int k = 0; k < 3; ++k) idx[3 * f + k] = triangles->triangles[f][k];
+        rtcSetGeometryMask(g, kTriangleMask);
         rtcCommitGeometry(g);
         m.tri_geom = rtcAttachGeometry(m.scene, g);
         rtcReleaseGeometry(g);
@@ -135,6 +141,7 @@ EmbreeScene::EmbreeScene(const TriMesh* triangles, const std::vector<Patch>* pat
         rtcSetGeometryUserData(g, const_cast<std::vector<Patch>*>(patches));
         rtcSetGeometryBoundsFunction(g, patch_bounds, nullptr);
         rtcSetGeometryIntersectFunction(g, patch_intersect);
+        rtcSetGeometryMask(g, kPatchMask);
         rtcCommitGeometry(g);
         m.patch_geom = rtcAttachGeometry(m.scene, g);
         rtcReleaseGeometry(g);
@@ -179,6 +186,50 @@ Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, doub
         c.tag = impl_->triangles->tags[c.prim];
     }
     return c;
+}
+
+bool EmbreeScene::packets_supported() const { return impl_->masks && impl_->tri_geom != RTC_INVALID_GEOMETRY_ID; }
+
+void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out) const {
+    if (n < 0 || n > kPacket) throw std::invalid_argument("EmbreeScene::intersect_packet: more rays than a packet holds");
+    if (!packets_supported()) throw std::logic_error("EmbreeScene::intersect_packet: this scene cannot take packets");
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    alignas(64) int valid[kPacket];
+    alignas(64) RTCRayHit16 rh;
+    for (int i = 0; i < kPacket; ++i) {
+        valid[i] = i < n ? -1 : 0;
+        // Each lane exactly as make_rayhit rounds a single ray.
+        const Vec3& a = o[i < n ? i : 0];
+        const Vec3& b = d[i < n ? i : 0];
+        rh.ray.org_x[i] = static_cast<float>(a.x);
+        rh.ray.org_y[i] = static_cast<float>(a.y);
+        rh.ray.org_z[i] = static_cast<float>(a.z);
+        rh.ray.dir_x[i] = static_cast<float>(b.x);
+        rh.ray.dir_y[i] = static_cast<float>(b.y);
+        rh.ray.dir_z[i] = static_cast<float>(b.z);
+        rh.ray.tnear[i] = 0.0f;
+        rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+        rh.ray.mask[i] = kTriangleMask;
+        rh.ray.flags[i] = 0;
+        rh.ray.time[i] = 0;
+        rh.ray.id[i] = static_cast<unsigned>(i);
+        rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, impl_->scene, &ctx, &rh);
+    for (int i = 0; i < n; ++i) {
+        Candidate c;
+        if (rh.hit.geomID[i] == impl_->tri_geom) {
+            c.hit = true;
+            c.t = rh.ray.tfar[i];
+            c.prim = rh.hit.primID[i];
+            c.tag = impl_->triangles->tags[c.prim];
+        }
+        out[i] = c;
+    }
 }
 
 long EmbreeScene::raw_intersect(const Vec3& o, const Vec3& d, float tmin) const {

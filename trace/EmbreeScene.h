@@ -32,6 +32,16 @@ public:
     Candidate intersect(const Vec3& o, const Vec3& d, double tmin, double tmax, const std::uint32_t* skip = nullptr,
                         int skip_count = 0, double skip_until = 0) const;
 
+    // Up to kPacket rays at once through rtcIntersect16 with the coherent flag, over (0, inf),
+    // against the TRIANGLES only (the user patches carry another geometry mask): out[i] is what
+    // intersect(o[i], d[i], 0, inf) returns whenever no patch lies before that triangle (the
+    // caller checks; Tracer::refined_hit). Requires packets_supported().
+    static constexpr int kPacket = 16;
+    void intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out) const;
+    // Whether this Embree build honours ray masks (RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED),
+    // without which a packet would reach the patches' single-ray callback.
+    bool packets_supported() const;
+
     // A bare rtcIntersect1 on the same scene (no filter, no refinement): the benchmark baseline.
     // Returns the hit primitive or -1.
     long raw_intersect(const Vec3& o, const Vec3& d, float tmin) const;

@@ -3,6 +3,8 @@
 // or plane restricted to rho <= a and, for a sphere, to the branch through the vertex) and the
 // rim (the cylinder rho = a between the caps' edges). Also the closed ellipsoid defects.
 // Used as Embree user geometry (the analytic representation) and as the tracer's exact guard.
+#include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "geometry/Lens.h"
@@ -21,10 +23,45 @@ struct Patch {
     Aabb bounds;
     Vec3 centre;                 // a bounding sphere (for cheap rejection of closed patches)
     double bounding_radius = 0;
-    // Precomputed by finalize(): the boundary tests' limits, with a few ulps of slack.
+    // Precomputed by finalize(): the boundary tests' limits, with a few ulps of slack, and the
+    // box a segment must meet for the patch to be solved (bounds inflated by kCullMargin).
     double rho2_max = 0, z_min = 0, z_max = 0;
+    double rho2_inside = 0;  // rim: (a (1 - kRimInsideMargin))^2
+    Aabb cull;
     void finalize();
 };
+
+// Does the ray segment [0, tmax] meet the box? (The slab test; tmax may be +inf.)
+inline bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const Aabb& b) {
+    double t0 = 0, t1 = tmax;
+    for (int i = 0; i < 3; ++i) {
+        if (d[i] == 0) {
+            if (o[i] < b.lo[i] || o[i] > b.hi[i]) return false;
+            continue;
+        }
+        double a = (b.lo[i] - o[i]) / d[i], c = (b.hi[i] - o[i]) / d[i];
+        if (a > c) std::swap(a, c);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, c);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+// Whether patch_hit(p, o, d, 0, tmax) can find a root at all (conservative: see kCullMargin and
+// kRimInsideMargin in TraceTolerance.h).
+inline bool may_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {
+    if (p.kind == Patch::Kind::Rim && tmax < INFINITY) {
+        // Both ends inside the cylinder by the margin: a convex set, so no crossing between.
+        const auto rho2 = [&](const Vec3& x) {
+            const Vec3 v = x - p.surface.origin;
+            const double h = dot(v, p.surface.axis);
+            return dot(v, v) - h * h;
+        };
+        if (rho2(o) < p.rho2_inside && rho2(o + d * tmax) < p.rho2_inside) return false;
+    }
+    return p.cull.empty() || segment_meets_box(o, d, tmax, p.cull);
+}
 
 // Does the segment o + t d, t in [0, tmax], come within the patch's bounding sphere?
 inline bool segment_near(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {

@@ -65,11 +65,6 @@ private:
     std::thread thread_;
 };
 
-struct Entry {
-    std::int32_t column;
-    double weight;
-};
-
 // What one block of pixels produced: its rows (their lengths, then their entries back to back),
 // its path statistics and its defect counts. Kept per wave and reused, so a wave allocates only
 // while its buffers still grow.
@@ -156,6 +151,23 @@ private:
 
 }  // namespace
 
+std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::int32_t>& columns,
+                       std::vector<float>& values) {
+    // Merge equal columns, summing in sample order (the stable sort keeps it).
+    std::stable_sort(entries.begin(), entries.end(), [](const RowEntry& a, const RowEntry& b) { return a.column < b.column; });
+    std::int32_t n = 0;
+    for (size_t i = 0; i < entries.size();) {
+        double w = 0;
+        size_t j = i;
+        for (; j < entries.size() && entries[j].column == entries[i].column; ++j) w += entries[j].weight;
+        columns.push_back(entries[i].column);
+        values.push_back(static_cast<float>(w / spp));
+        ++n;
+        i = j;
+    }
+    return n;
+}
+
 std::uint64_t render_seed(const Scene& scene, const RenderOptions& options) {
     return options.stream == 0 ? scene.seed : mix_seed(scene.seed, options.stream);
 }
@@ -204,29 +216,34 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
 
     auto render_block = [&](long b, BlockRows& br) {
         PathStats& stats = br.stats;
-        std::vector<Entry> entries;
+        std::vector<RowEntry> entries;
         entries.reserve(static_cast<size_t>(spp));
-        // The branches of one camera sample (one with the sample estimator); reused, so after the
-        // first samples no allocation happens per sample.
+        // The branches of one packet of camera samples (one per sample with the sample
+        // estimator); reused, so after the first samples no allocation happens per sample.
         std::vector<PathResult> branches;
+        Vec3 packet_o[Tracer::kPacket], packet_d[Tracer::kPacket];
+        std::vector<Rng> packet_rng;
+        packet_rng.reserve(Tracer::kPacket);
+        size_t packet_end[Tracer::kPacket];
         for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
             const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
             const size_t first_count = br.defects.size();
             entries.clear();
             double sum = 0, sum2 = 0;
-            for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& o, const Vec3& d) {
-                branches.clear();
-                tracer.sample_paths(o, d, rng, stats, branches);
+            // One camera sample's branches, branches[b, e): its value for the pattern, its
+            // entries of the row and the defects it met.
+            const auto consume = [&](size_t b0, size_t e0) {
                 // The sample's value for the pattern: the sum of its branches' contributions.
                 double f = 0;
                 bool on_display = false;
-                for (size_t i = 0; i < branches.size(); ++i) {
+                for (size_t i = b0; i < e0; ++i) {
                     const PathResult& r = branches[i];
                     // A sample met defect j first when one of its branches did; it counts once per
                     // defect, so the counts stay numbers of samples (study/GroundTruth.h).
+                    const auto first_branch = branches.begin() + static_cast<long>(b0);
                     const auto earlier = branches.begin() + static_cast<long>(i);
                     if (opt.track_defects && r.defect >= 0 &&
-                        std::none_of(branches.begin(), earlier, [&](const PathResult& e) { return e.defect == r.defect; })) {
+                        std::none_of(first_branch, earlier, [&](const PathResult& e) { return e.defect == r.defect; })) {
                         auto& list = br.defects;
                         auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
                                                [&](const DefectPaths& e) { return e.defect == r.defect; });
@@ -246,7 +263,24 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                     sum += f;
                     sum2 += f * f;
                 }
+            };
+            // The pixel's samples in packets of Tracer::kPacket (Tracer::sample_packet), consumed
+            // in sample order: the same results as one sample at a time.
+            int pn = 0;
+            const auto flush = [&] {
+                branches.clear();
+                tracer.sample_packet(pn, packet_o, packet_d, packet_rng.data(), stats, branches, packet_end);
+                for (int i = 0; i < pn; ++i) consume(i == 0 ? 0 : packet_end[i - 1], packet_end[i]);
+                packet_rng.clear();
+                pn = 0;
+            };
+            for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& o, const Vec3& d) {
+                packet_o[pn] = o;
+                packet_d[pn] = d;
+                packet_rng.push_back(rng);
+                if (++pn == Tracer::kPacket) flush();
             });
+            if (pn > 0) flush();
             if (opt.track_defects)
                 std::sort(br.defects.begin() + static_cast<long>(first_count), br.defects.end(),
                           [](const DefectPaths& a, const DefectPaths& c) { return a.defect < c.defect; });
@@ -258,20 +292,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 out.image_stderr[static_cast<size_t>(k)] = std::sqrt(var / n);
                 continue;
             }
-            // Merge equal columns, summing in sample order (stable sort keeps it).
-            std::stable_sort(entries.begin(), entries.end(),
-                             [](const Entry& a, const Entry& b) { return a.column < b.column; });
-            std::int32_t n = 0;
-            for (size_t i = 0; i < entries.size();) {
-                double w = 0;
-                size_t j = i;
-                for (; j < entries.size() && entries[j].column == entries[i].column; ++j) w += entries[j].weight;
-                br.columns.push_back(entries[i].column);
-                br.values.push_back(static_cast<float>(w / spp));
-                ++n;
-                i = j;
-            }
-            br.row_nnz.push_back(n);
+            br.row_nnz.push_back(merge_row(entries, spp, br.columns, br.values));
         }
         progress.add(std::min(items, (b + 1) * kBlock) - b * kBlock);
     };
@@ -361,6 +382,8 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     }
     std::vector<BlockRows>().swap(wave);
 
+    const auto t_merge = std::chrono::steady_clock::now();
+    out.trace_seconds = std::chrono::duration<double>(t_merge - t0).count();
     if (!pattern) {
         while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < K) indptr.push_back(indptr.back());
         out.nnz = total_nnz;
@@ -375,7 +398,9 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             held_data.move_to(T.data);
         }
     }
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto t_end = std::chrono::steady_clock::now();
+    out.merge_seconds = std::chrono::duration<double>(t_end - t_merge).count();
+    out.seconds = std::chrono::duration<double>(t_end - t0).count();
     return out;
 }
 

@@ -27,6 +27,7 @@
 // renders several samples at once this way).
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "io/CsrMatrix.h"
@@ -83,8 +84,22 @@ struct RenderResult {
     bool tracked_defects = false;
     std::vector<DefectPaths> defect_paths;
     PathStats stats;
-    double seconds = 0;
+    double seconds = 0;        // the whole render: trace_seconds + merge_seconds
+    double trace_seconds = 0;  // tracing, merging each row's samples, holding the rows wave by wave
+    double merge_seconds = 0;  // moving the held rows into the CSR matrix (or the last to the sink)
 };
+
+// One path branch's contribution to a row, before the row is merged.
+struct RowEntry {
+    std::int32_t column;
+    double weight;
+};
+// Appends the merged row to `columns` and `values`: one entry per distinct column of `entries`,
+// the weights summed in the order they come (a stable sort by column keeps sample order, so the
+// sum, and the float it rounds to, does not depend on threads) and divided by the samples per
+// pixel. Returns the row's length. Reorders `entries`.
+std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::int32_t>& columns,
+                       std::vector<float>& values);
 
 RenderResult render(const Tracer& tracer, const RenderOptions& options);
 

@@ -39,6 +39,21 @@ inline constexpr double kSpawnOffsetBounds = 2.0;
 // along the normal instead (which shifts the path sideways by one offset, ~1e-13 L).
 inline constexpr double kSpawnMinCos = 1e-3;
 
+// ---- Culling a patch before solving it (Patch::cull, Tracer::analytic_hit, exact_guard) ------------
+// A patch is solved only if the segment meets its box inflated by kCullMargin x (its extent +
+// its largest coordinate). Every root patch_hit accepts lies on the patch up to its boundary
+// slack (8 u of the aperture) and the rounding of o + t d (a few u (|o| + t)), both ~1e-14 of the
+// scene, and the slab test's own rounding is of the same size; 1e-9 is 5 orders above them, so
+// the cull never drops a root the solve would have returned (results are bit-identical with and
+// without it) and still rejects every patch the segment misses by more than ~1e-8 mm.
+inline constexpr double kCullMargin = 1e-9;
+// The rim (a cylinder of radius a) is not solved for a segment whose both ends lie inside it by
+// kRimInsideMargin a in radius: the set inside a cylinder is convex, so the segment cannot cross
+// it, and its line passes the axis within a (1 - m), so the quadratic's discriminant is at least
+// ~2 m a^2 and its computed roots err by ~u a / sqrt(2 m) ~ 1.6e-13 a for m = 1e-6, far less than
+// their distance m a from the ends: no root the solve would return lies in the segment.
+inline constexpr double kRimInsideMargin = 1e-6;
+
 // ---- The exact guard (Tracer::exact_guard, Tracer::on_glass_boundary) ------------------------------
 // A root of a cutter's surface is a crossing of the glass boundary where membership of the cutter
 // changes across it; membership is tested at t -+ delta along the ray. delta must exceed the

@@ -59,6 +59,8 @@ void PathStats::merge(const PathStats& o) {
     leaks_unresolved += o.leaks_unresolved;
     seam_repairs += o.seam_repairs;
     edge_chords += o.edge_chords;
+    packet_segments += o.packet_segments;
+    packet_fallbacks += o.packet_fallbacks;
     grin_segments += o.grin_segments;
     grin_evaluations += o.grin_evaluations;
     tet_crossings += o.tet_crossings;
@@ -226,6 +228,8 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
             embree_ = std::make_unique<EmbreeScene>(&tri_mesh_, nullptr, options_.robust);
             break;
     }
+    packets_ = options_.representation != Representation::Analytic && user_patches_.size() <= kLinearScanLimit &&
+               embree_->packets_supported();
     face_normals_.resize(tri_mesh_.num_triangles());
     for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
 }
@@ -272,27 +276,6 @@ Medium Tracer::medium_at(const Vec3& p) const {
     return Medium::Glass;
 }
 
-namespace {
-
-// Does the ray segment (0, tmax) meet the box?
-bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const Aabb& b) {
-    double t0 = 0, t1 = tmax;
-    for (int i = 0; i < 3; ++i) {
-        if (d[i] == 0) {
-            if (o[i] < b.lo[i] || o[i] > b.hi[i]) return false;
-            continue;
-        }
-        double a = (b.lo[i] - o[i]) / d[i], c = (b.hi[i] - o[i]) / d[i];
-        if (a > c) std::swap(a, c);
-        t0 = std::max(t0, a);
-        t1 = std::min(t1, c);
-        if (t0 > t1) return false;
-    }
-    return true;
-}
-
-}  // namespace
-
 double Tracer::bounds_exit(const Vec3& o, const Vec3& d) const {
     double t0 = 0, t1 = INFINITY;
     for (int i = 0; i < 3; ++i) {
@@ -314,7 +297,7 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
     // boundary, not just the first root: a ray leaving a groove through its opening crosses the
     // face's surface inside the void before it meets the face again where it re-enters the glass.
     for (const Patch& p : object_patches_) {
-        if (p.tag == solved_patch) continue;
+        if (p.tag == solved_patch || !may_hit(p, o, d, best.t < tmax ? best.t : tmax)) continue;
         double t = patch_hit(p, o, d, 0.0, best.t < tmax ? best.t : tmax);
         while (t < INFINITY && !on_glass_boundary(p.tag, o, d, t)) t = patch_hit(p, o, d, t, best.t < tmax ? best.t : tmax);
         if (t < INFINITY) {
@@ -414,28 +397,28 @@ Tracer::Hit Tracer::on_surface(Hit h) const {
     return h;
 }
 
-Tracer::Hit Tracer::propagate(const State& st, PathStats& stats) const {
+Tracer::Hit Tracer::propagate(const State& st, PathStats& stats, const Candidate* first) const {
     const MediumInfo& m = (*media_)[st.medium];
     switch (m.propagation) {
         case Propagation::Grin: return grin_hit(st, m, stats);
         case Propagation::TetWalk: return walk_hit(st, m, stats);
         default: break;
     }
-    Hit h = straight_hit(st, stats);
+    Hit h = straight_hit(st, stats, first);
     h.d_in = st.d;
     h.length = h.t;
     h.n_from = h.repaired && h.found ? index_at(h.medium, h.p) : m.index;
     return h;
 }
 
-Tracer::Hit Tracer::straight_hit(const State& st, PathStats& stats) const {
+Tracer::Hit Tracer::straight_hit(const State& st, PathStats& stats, const Candidate* first) const {
     if (st.escaped) return {};
     switch (options_.representation) {
         case Representation::Analytic: return analytic_hit(st, stats);
-        case Representation::MeshOnly: return mesh_only_hit(st);
+        case Representation::MeshOnly: return mesh_only_hit(st, stats, first);
         case Representation::Refined: break;
     }
-    return refined_hit(st, stats);
+    return refined_hit(st, stats, first);
 }
 
 Tracer::Hit Tracer::analytic_hit(const State& st, PathStats& stats) const {
@@ -443,6 +426,7 @@ Tracer::Hit Tracer::analytic_hit(const State& st, PathStats& stats) const {
     const Vec3& d = st.d;
     Hit h;
     for (const Patch& p : object_patches_) {
+        if (!may_hit(p, o, d, h.t)) continue;
         const double t = patch_hit(p, o, d, 0.0, h.t);
         if (t < h.t) {
             h.t = t;
@@ -476,11 +460,13 @@ Tracer::Hit Tracer::analytic_hit(const State& st, PathStats& stats) const {
     return on_surface(h);
 }
 
-Tracer::Hit Tracer::mesh_only_hit(const State& st) const {
+Tracer::Hit Tracer::mesh_only_hit(const State& st, PathStats& stats, const Candidate* first) const {
     const Vec3& o = st.o;
     const Vec3& d = st.d;
     const std::uint32_t skip[1] = {st.skip_prim};
-    const Candidate c = embree_->intersect(o, d, 0.0, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
+    // A packet's candidate is the query's own answer: this scene has triangles only.
+    const Candidate c = first ? *first : embree_->intersect(o, d, 0.0, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
+    if (first) ++stats.packet_segments;
     if (!c.hit) return {};
     Hit h;
     h.found = true;
@@ -496,26 +482,46 @@ Tracer::Hit Tracer::mesh_only_hit(const State& st) const {
     return h;
 }
 
-Tracer::Hit Tracer::refined_hit(const State& st, PathStats& stats) const {
+bool Tracer::packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const {
+    // The full query takes a patch's root only before the nearest triangle (Embree's tfar): a
+    // patch whose bounding sphere the segment up to the candidate (widened by far more than the
+    // float rounding of its distance) does not meet cannot be that answer.
+    const double reach = c.hit ? c.t * (1.0 + 1e-6) : INFINITY;
+    for (const Patch& p : user_patches_)
+        if (segment_near(p, o, d, reach)) return false;
+    return true;
+}
+
+Tracer::Hit Tracer::refined_hit(const State& st, PathStats& stats, const Candidate* first) const {
     const Vec3& o = st.o;
     const Vec3& d = st.d;
     const SurfaceTable& table = solid_.surfaces;
-    Vec3 b1, b2;
-    orthonormal_basis(d, b1, b2);
     const double omag = std::max({std::fabs(o.x), std::fabs(o.y), std::fabs(o.z), trace_tol::kOriginFloor * scale_});
     Hit last_inconsistent;
     for (int attempt = 0; attempt < trace_tol::kLeakRetries; ++attempt) {
-        if (attempt > 0) ++stats.leak_retries;
         // A jittered candidate ray, a few float ulps off the true one, steps past a vertex or
-        // edge the true ray slipped through; the hit is still solved for the true ray.
-        const double jitter = attempt == 0 ? 0.0 : trace_tol::kJitterUlps * attempt * kFloatUlp * omag;
-        const double ang = trace_tol::kGoldenAngle * attempt;  // a new direction each time
-        const Vec3 oq = o + (b1 * std::cos(ang) + b2 * std::sin(ang)) * jitter;
+        // edge the true ray slipped through; the hit is still solved for the true ray. The first
+        // attempt is the true ray itself (no basis, no sincos: most segments need no retry).
+        Vec3 oq = o;
+        if (attempt > 0) {
+            ++stats.leak_retries;
+            Vec3 b1, b2;
+            orthonormal_basis(d, b1, b2);
+            const double jitter = trace_tol::kJitterUlps * attempt * kFloatUlp * omag;
+            const double ang = trace_tol::kGoldenAngle * attempt;  // a new direction each time
+            oq = o + (b1 * std::cos(ang) + b2 * std::sin(ang)) * jitter;
+        }
         Hit best;
         double tmin = 0;
         for (int s = 0; s < 16; ++s) {
             const std::uint32_t skip[1] = {st.skip_prim};
-            const Candidate c = embree_->intersect(oq, d, tmin, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
+            bool packed = false;
+            if (first && attempt == 0 && s == 0) {
+                packed = packet_answers(*first, o, d);
+                ++(packed ? stats.packet_segments : stats.packet_fallbacks);
+            }
+            const Candidate c =
+                packed ? *first : embree_->intersect(oq, d, tmin, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
             if (!c.hit) break;
             const double step_past = trace_tol::kCandidateStepUlps * kFloatUlp * (omag + c.t);
             if (c.analytic) {
@@ -731,7 +737,7 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
 }
 
 template <bool Principal>
-void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, SplitStack* split) const {
+void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, SplitStack* split, const Hit* first) const {
     const SurfaceTable& table = solid_.surfaces;
     const double alpha = scene_.object.absorption;
     // Spawns the ray leaving the interface h along nd (unit; nf the normal on the incident side)
@@ -771,7 +777,9 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, Spli
             st.weight = 0;
             return;
         }
-        const Hit h = propagate(st, stats);
+        if (rec) rec->segments.push_back({st.o, st.d, st.medium, st.skip, st.skip_prim, st.skip_until, st.escaped});
+        const Hit h = first ? *first : propagate(st, stats);
+        first = nullptr;
         ++stats.segments;
         if (h.repaired) st.medium = h.medium;  // the geometry's medium for this segment
         if (h.lost) {
@@ -923,6 +931,23 @@ Tracer::FirstHit Tracer::first_hit(const Vec3& origin, const Vec3& direction, Me
     return f;
 }
 
+Tracer::FirstHit Tracer::first_hit(const SegmentStart& start, PathStats& stats) const {
+    State st;
+    st.o = start.o;
+    st.d = start.d;
+    st.medium = start.medium;
+    st.skip = start.skip;
+    st.skip_prim = start.skip_prim;
+    st.skip_until = start.skip_until;
+    st.escaped = start.escaped;
+    const Hit h = propagate(st, stats);
+    FirstHit f;
+    f.found = h.found;
+    f.t = h.t;
+    f.tag = h.tag;
+    return f;
+}
+
 PrincipalPath Tracer::principal_path(const Vec3& origin, const Vec3& direction) const {
     PrincipalPath rec;
     PathStats stats;
@@ -977,23 +1002,81 @@ PathResult Tracer::sample_path(const Vec3& origin, const Vec3& direction, Rng& r
 
 void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
                           std::vector<PathResult>& out) const {
-    const TracingDesc& tracing = scene_.tracing;
-    if (tracing.estimator == Estimator::Sample || tracing.split_depth == 0) {
-        out.push_back(sample_path(origin, direction, rng, stats));
+    sample_paths_from(origin, direction, rng, stats, out, nullptr);
+}
+
+void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                           std::vector<PathResult>& out, size_t* ends) const {
+    if (n < 0 || n > kPacket) throw std::invalid_argument("Tracer::sample_packet: more samples than a packet holds");
+    if (!packets_ || n < 2) {
+        for (int i = 0; i < n; ++i) {
+            sample_paths_from(origins[i], directions[i], rngs[i], stats, out, nullptr);
+            ends[i] = out.size();
+        }
         return;
     }
-    ++stats.paths;
+    // The first segment draws no random number, so finding it ahead of the path changes nothing
+    // the path draws.
+    Hit h[kPacket];
+    packet_hits(n, origins, directions, h, stats);
+    for (int i = 0; i < n; ++i) {
+        sample_paths_from(origins[i], directions[i], rngs[i], stats, out, &h[i]);
+        ends[i] = out.size();
+    }
+}
+
+void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats& stats) const {
+    // One coherent packet of triangle candidates, each finished as its own query would be
+    // (refined_hit, mesh_only_hit).
+    Candidate c[kPacket];
+    embree_->intersect_packet(origins, directions, n, c);
+    for (int i = 0; i < n; ++i) {
+        State st;
+        st.o = origins[i];
+        st.d = directions[i];
+        st.medium = Medium::Air;
+        out[i] = propagate(st, stats, &c[i]);
+    }
+}
+
+void Tracer::first_hits(int n, const Vec3* origins, const Vec3* directions, FirstHit* out, PathStats& stats) const {
+    if (n < 0 || n > kPacket) throw std::invalid_argument("Tracer::first_hits: more rays than a packet holds");
+    Hit h[kPacket];
+    if (packets_ && n >= 2) {
+        packet_hits(n, origins, directions, h, stats);
+    } else {
+        for (int i = 0; i < n; ++i) {
+            State st;
+            st.o = origins[i];
+            st.d = directions[i];
+            st.medium = Medium::Air;
+            h[i] = propagate(st, stats);
+        }
+    }
+    for (int i = 0; i < n; ++i) out[i] = {h[i].found, h[i].t, h[i].tag};
+}
+
+void Tracer::sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
+                               std::vector<PathResult>& out, const Hit* first) const {
+    const TracingDesc& tracing = scene_.tracing;
     State st;
     st.o = origin;
     st.d = direction;
     st.medium = Medium::Air;
+    ++stats.paths;
+    if (tracing.estimator == Estimator::Sample || tracing.split_depth == 0) {
+        run<false>(st, &rng, stats, nullptr, nullptr, first);
+        out.push_back(branch_result(st, stats));
+        return;
+    }
     st.splits_left = tracing.split_depth;  // <= kMaxSplitDepth (the constructor checks)
     // Depth first, transmitted branch first: the order in which branches draw from `rng` and are
     // appended is fixed by the sample alone. After split_depth splits a branch is an ordinary
     // sampled path (random Fresnel choices, roulette from rr_depth) carrying its weight.
     SplitStack pending;
     for (;;) {
-        run<false>(st, &rng, stats, nullptr, &pending);
+        run<false>(st, &rng, stats, nullptr, &pending, first);
+        first = nullptr;
         out.push_back(branch_result(st, stats));
         if (pending.size == 0) return;
         st = pending.items[static_cast<size_t>(--pending.size)];

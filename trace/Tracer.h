@@ -68,6 +68,9 @@ struct PathStats {
     // the geometry repaired, and chords through an edge too short to resolve. The path's media
     // stay consistent; the refraction at the edge itself is lost.
     std::uint64_t seam_repairs = 0, edge_chords = 0;
+    // Camera rays whose first segment came from a coherent packet (Tracer::sample_packet), and
+    // those of them that queried again alone because an ellipsoid lay near the packet's answer.
+    std::uint64_t packet_segments = 0, packet_fallbacks = 0;
     // Curved paths: segments traced through a graded-index medium, path evaluations of the closed
     // forms, tetrahedra crossed, paths that found no exit (lost), |p|^2 != n^2 beyond
     // TraceTolerance's bound, walks that left their region other than through an exact surface.
@@ -77,7 +80,19 @@ struct PathStats {
     void merge(const PathStats& o);
 };
 
+// A segment's start exactly as the integrator spawned it: where the "next interface" step of
+// that segment begins (a benchmark replays the step alone: bench/StageBreakdown.h).
+struct SegmentStart {
+    Vec3 o, d;
+    Medium medium = Medium::Air;
+    bool skip = false;         // the triangle just left, skipped within skip_until
+    std::uint32_t skip_prim = 0;
+    double skip_until = 0;
+    bool escaped = false;      // left a convex object: nothing of it can be met again
+};
+
 struct PrincipalPath {
+    std::vector<SegmentStart> segments;  // one per segment, in order (the last one escapes or ends)
     std::vector<Vec3> vertices;
     std::vector<int> tags;
     // The medium the tracer believes each segment is in: media[i] is the medium of the segment
@@ -131,6 +146,18 @@ public:
     // Every branch draws from `rng` in that order, so the results depend on the stream alone.
     void sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
                       std::vector<PathResult>& out) const;
+    // The camera samples origins[i], directions[i] (i < n <= kPacket), each with its own stream
+    // rngs[i], exactly as sample_paths one after another (the same results, bit for bit, in the
+    // same order; ends[i] = out.size() after sample i), with their first segments found in one
+    // coherent Embree packet where the representation allows (packets()): a pixel's camera rays
+    // are nearly parallel and start side by side, so they share their BVH traversal.
+    static constexpr int kPacket = EmbreeScene::kPacket;
+    void sample_packet(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                       std::vector<PathResult>& out, size_t* ends) const;
+    // Whether sample_packet uses packets: the mesh representations, with a few enclosed
+    // ellipsoids at most (each camera ray checks them: see refined_hit) and an Embree that honours
+    // ray masks.
+    bool packets() const { return packets_; }
     // A read-only hook for tests that judge paths independently (tests/trace_stress.cpp): one path
     // from `origin`, which the caller says lies in `medium` (the tracer does not look it up), with
     // every vertex, tag and segment medium recorded. With `rng` the interactions are chosen as in
@@ -145,6 +172,11 @@ public:
         int tag = -1;
     };
     FirstHit first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const;
+    // The same step from a recorded segment start (PrincipalPath::segments), skip state included.
+    FirstHit first_hit(const SegmentStart& start, PathStats& stats) const;
+    // The first segments of n <= kPacket camera rays (from the air, nothing to skip) as
+    // sample_packet finds them: in one packet where packets() allows.
+    void first_hits(int n, const Vec3* origins, const Vec3* directions, FirstHit* out, PathStats& stats) const;
 
     const Scene& scene() const { return scene_; }
     const Solid& solid() const { return solid_; }
@@ -161,12 +193,19 @@ private:
     struct Hit;
     struct State;
     // The next interface from the ray's state, by its medium's propagation.
-    Hit propagate(const State& st, PathStats& stats) const;
+    // `first`: the triangle candidate of a camera ray from a packet (EmbreeScene::
+    // intersect_packet), used in place of the segment's first Embree query.
+    Hit propagate(const State& st, PathStats& stats, const Candidate* first = nullptr) const;
     // Straight segments, by representation.
-    Hit straight_hit(const State& st, PathStats& stats) const;
+    Hit straight_hit(const State& st, PathStats& stats, const Candidate* first) const;
     Hit analytic_hit(const State& st, PathStats& stats) const;
-    Hit refined_hit(const State& st, PathStats& stats) const;
-    Hit mesh_only_hit(const State& st) const;
+    Hit refined_hit(const State& st, PathStats& stats, const Candidate* first) const;
+    Hit mesh_only_hit(const State& st, PathStats& stats, const Candidate* first) const;
+    // Whether a packet's triangle candidate c of the ray (o, d) is what the full single-ray query
+    // returns: no ellipsoid patch (which the packet does not see) can lie before it.
+    bool packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const;
+    // The first segments' hits of n (2 <= n <= kPacket) camera rays from one packet (packets_).
+    void packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats& stats) const;
     // Curved segments.
     Hit grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
     Hit walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
@@ -176,8 +215,13 @@ private:
     // One path (one branch) from st until it ends. With `split` (sampled paths only), a Fresnel
     // interaction while st.splits_left > 0 pushes the reflected branch onto it and continues
     // with the transmitted one.
+    // `first`: the first segment's hit, found already (sample_packet).
     template <bool Principal>
-    void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split) const;
+    void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split,
+             const Hit* first = nullptr) const;
+    // sample_paths with the first segment's hit found already (or nullptr).
+    void sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
+                           std::vector<PathResult>& out, const Hit* first) const;
     // Where an ended branch lands on the display (weight 0 or off the display: pixel -1).
     PathResult branch_result(const State& st, PathStats& stats) const;
     // The index of medium m at point x (a field's local value).
@@ -238,6 +282,7 @@ private:
     std::unique_ptr<EmbreeScene> embree_;
     double scale_ = 1;
     bool convex_ = false;  // the object is a convex body (Lens::is_convex)
+    bool packets_ = false;  // sample_packet traces first segments in packets
 };
 
 }  // namespace ltm
