@@ -142,6 +142,27 @@ std::size_t central_header_of(const std::string& zip, const std::string& name) {
     return std::string::npos;
 }
 
+// The message of what f throws while the process may write files of at most 4096 bytes (the
+// write fails half-way with EFBIG, SIGXFSZ ignored), or "" if it throws nothing.
+template <class F>
+std::string message_under_file_size_limit(F&& f) {
+    struct sigaction ignore {}, previous {};
+    ignore.sa_handler = SIG_IGN;
+    ::sigaction(SIGXFSZ, &ignore, &previous);
+    rlimit saved{};
+    ::getrlimit(RLIMIT_FSIZE, &saved);
+    rlimit small = saved;
+    small.rlim_cur = 4096;
+    if (::setrlimit(RLIMIT_FSIZE, &small) != 0) {
+        ::sigaction(SIGXFSZ, &previous, nullptr);
+        return "setrlimit failed";
+    }
+    const std::string msg = message_of(f);
+    ::setrlimit(RLIMIT_FSIZE, &saved);
+    ::sigaction(SIGXFSZ, &previous, nullptr);
+    return msg;
+}
+
 }  // namespace
 
 // ----- CsrMatrix -----
@@ -370,17 +391,7 @@ TEST_F(LtmFileTest, AFailedStreamedCommitLeavesTheTargetUntouched) {
     const CsrMatrix big = random_matrix(20000, 1000, 10, 1);
     ltm::LtmFileStream stream(target, big.rows, big.cols);
     stream.append(big);
-    struct sigaction ignore {}, previous {};
-    ignore.sa_handler = SIG_IGN;
-    ::sigaction(SIGXFSZ, &ignore, &previous);
-    rlimit saved{};
-    ::getrlimit(RLIMIT_FSIZE, &saved);
-    rlimit small = saved;
-    small.rlim_cur = 4096;
-    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
-    const std::string msg = message_of([&] { stream.commit(); });
-    ::setrlimit(RLIMIT_FSIZE, &saved);
-    ::sigaction(SIGXFSZ, &previous, nullptr);
+    const std::string msg = message_under_file_size_limit([&] { stream.commit(); });
     EXPECT_NE(msg.find("cannot write LTM file '" + target + "'"), std::string::npos) << msg;
     EXPECT_NE(msg.find("File too large"), std::string::npos) << msg;
     EXPECT_EQ(slurp(target), before);
@@ -672,17 +683,7 @@ TEST_F(LtmFileTest, FailedWritesLeaveTheTargetUntouched) {
 
     // A write that fails half-way (file size limit): the temporary is removed, the target stays.
     {
-        struct sigaction ignore {}, previous {};
-        ignore.sa_handler = SIG_IGN;
-        ::sigaction(SIGXFSZ, &ignore, &previous);
-        rlimit saved{};
-        ::getrlimit(RLIMIT_FSIZE, &saved);
-        rlimit small = saved;
-        small.rlim_cur = 4096;
-        ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
-        msg = message_of([&] { ltm::write_ltm_npz(target, random_matrix(20000, 1000, 10, 1)); });
-        ::setrlimit(RLIMIT_FSIZE, &saved);
-        ::sigaction(SIGXFSZ, &previous, nullptr);
+        msg = message_under_file_size_limit([&] { ltm::write_ltm_npz(target, random_matrix(20000, 1000, 10, 1)); });
         EXPECT_NE(msg.find("cannot write LTM file '" + target + "'"), std::string::npos) << msg;
         EXPECT_NE(msg.find("File too large"), std::string::npos) << msg;
     }

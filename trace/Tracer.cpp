@@ -919,16 +919,11 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, Spli
 }
 
 Tracer::FirstHit Tracer::first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const {
-    State st;
-    st.o = origin;
-    st.d = normalize_any(direction);
-    st.medium = medium;
-    const Hit h = propagate(st, stats);
-    FirstHit f;
-    f.found = h.found;
-    f.t = h.t;
-    f.tag = h.tag;
-    return f;
+    SegmentStart s;
+    s.o = origin;
+    s.d = normalize_any(direction);
+    s.medium = medium;
+    return first_hit(s, stats);
 }
 
 Tracer::FirstHit Tracer::first_hit(const SegmentStart& start, PathStats& stats) const {
