@@ -118,7 +118,7 @@ io::Json memory_json(const RenderMemory& m, const RenderResult& r, std::int64_t 
 }
 
 void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
-                         StageReport& report, const io::Json& memory) {
+                         StageReport& report, const io::Json& memory, bool previews) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     const fs::path d(dir);
@@ -149,10 +149,10 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
                 write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
                           {{"MeanX", mx}, {"MeanY", my}});
             },
-            [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}); });
+            [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}, previews); });
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
-                       {{"rows", rows}, {"cols", cols}, {"nnz", r.nnz}, {"streamed", r.streamed}, {"reference_pixels", run.reference_pixels}, {"reference_reused", run.reference_reused}},
+                       {{"rows", rows}, {"cols", cols}, {"nnz", r.nnz}, {"streamed", r.streamed}, {"reference_pixels", run.reference_pixels}, {"reference_reused", run.reference_reused}, {"previews", previews}},
                        report, memory);
     } catch (...) {
         for (const auto& p : written) fs::remove(p, ec);
@@ -219,14 +219,14 @@ FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const R
     return f;
 }
 
-void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera) {
+void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera, bool previews) {
     const fs::path pngs = fs::path(dir) / "features";
-    fs::create_directories(pngs);
+    if (previews) fs::create_directories(pngs);
     // Pseudo colour, scaled so a 100-pixel-wide image is ~400 pixels wide.
     const int scale = std::max(1, 400 / std::max(1, f.width));
     // Every file is independent (and each is atomic), so they are drawn, compressed and fsync'ed
     // in parallel; the bytes do not depend on the order. A failure is rethrown after the others.
-    const std::size_t n = f.channels.size();
+    const std::size_t n = previews ? f.channels.size() : 0;
     tbb::parallel_for(std::size_t(0), n + 2, [&](std::size_t i) {
         if (i == n) {
             write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);

@@ -42,8 +42,10 @@ io::Json memory_json(const RenderMemory& m, const RenderResult& r, std::int64_t 
 // A render folder: DIR/ltm.npz (written from T, or run.streamed_T committed when T was streamed), DIR/reference.exr (for a scene with defects), DIR/features.exr
 // and DIR/features.npz with DIR/features/*.png, and DIR/run.json (written last). On failure the
 // files this call wrote are removed and the exception rethrown.
+// previews = false (render --no-previews) leaves out DIR/features/*.png (and touches nothing
+// already in DIR/features/); run.json records "previews".
 void write_render_folder(const std::string& dir, const Scene& scene, const SceneRun& run, int threads,
-                         StageReport& report, const io::Json& memory = nullptr);
+                         StageReport& report, const io::Json& memory = nullptr, bool previews = true);
 
 // Reads the camera and display from DIR/run.json; throws std::runtime_error naming the file.
 RenderGeometry read_render_geometry(const std::string& dir);
@@ -59,7 +61,8 @@ FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const R
 // DIR/features.exr (one FLOAT channel per image), DIR/features.npz (the same channels as float32
 // arrays of shape (rows, columns), for numpy without an EXR reader) and DIR/features/<name>.png
 // (pseudo colour titled with the channel's unit; axes in mm over `camera`, the camera's field of
-// view, when it is known).
-void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera = {});
+// view, when it is known); the PNGs only with `previews`.
+void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera = {},
+                          bool previews = true);
 
 }  // namespace ltm::app

@@ -28,7 +28,7 @@ namespace {
 struct RenderArgs {
     std::string scene, dir, pattern, representation = "auto";
     int threads = 0;
-    bool overwrite = false, verbose = false, no_robust = false;
+    bool overwrite = false, verbose = false, no_robust = false, no_previews = false;
     FeatureOptions features{0.0, 0.99, -1};  // dark block -1: automatic (write_features)
     EstimatorArgs estimator;                  // overrides the scene's tracing section
     std::string max_memory;                   // GiB, as typed
@@ -164,7 +164,8 @@ int run(const RenderArgs& a) {
             write_render_folder(a.dir, scene, run, a.threads, report,
                                 memory_json(run.render_memory, r,
                                             static_cast<std::int64_t>(scene.camera.resolution[0]) * scene.camera.resolution[1],
-                                            *max_memory));
+                                            *max_memory),
+                                !a.no_previews);
         } else {
             std::error_code ec;
             fs::create_directories(a.dir, ec);
@@ -177,17 +178,19 @@ int run(const RenderArgs& a) {
                 written.push_back(dir / "image.exr");
                 write_npz_channels((dir / "image.npz").string(), N, M, {{"Image", y}, {"StdError", se}});
                 written.push_back(dir / "image.npz");
-                Image preview;
-                preview.width = N;
-                preview.height = M;
-                preview.channels = 1;
-                double peak = 0;
-                for (double v : r.image) peak = std::max(peak, v);
-                for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
-                write_png((dir / "image.png").string(), preview);
-                written.push_back(dir / "image.png");
+                if (!a.no_previews) {
+                    Image preview;
+                    preview.width = N;
+                    preview.height = M;
+                    preview.channels = 1;
+                    double peak = 0;
+                    for (double v : r.image) peak = std::max(peak, v);
+                    for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
+                    write_png((dir / "image.png").string(), preview);
+                    written.push_back(dir / "image.png");
+                }
                 write_run_json(a.dir, scene, r, representation, a.threads,
-                               {{"pattern", a.pattern}, {"image", "image.exr"}},
+                               {{"pattern", a.pattern}, {"image", "image.exr"}, {"previews", !a.no_previews}},
                                report, memory_json(run.render_memory, r, 0, 0));
             } catch (...) {
                 for (const auto& p : written) fs::remove(p, ec);
@@ -221,6 +224,8 @@ void add_render_command(CLI::App& app) {
                     "Budget for T in memory, GiB (default: half the physical memory); a larger T is traced in row blocks "
                     "and streamed to ltm.npz (features from the same blocks)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace existing outputs in the folder");
+    cmd->add_flag("--no-previews", args->no_previews,
+                  "Leave out the PNG previews DIR/features/*.png (the features are in features.exr and .npz)");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
     cmd->callback([args, max_memory] {
         args->max_memory_given = max_memory->count() > 0;

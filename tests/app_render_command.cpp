@@ -640,3 +640,29 @@ TEST_F(RenderCommand, BadMaxMemoryExitsTwoNamingTheOptionAndWritesNothing) {
     EXPECT_NE(r.err.find("--max-memory applies to T"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));
 }
+
+TEST_F(RenderCommand, NoPreviewsLeavesOutThePngsAndChangesNothingElse) {
+    // --no-previews skips DIR/features/*.png (and, with a pattern, DIR/image.png): the files it
+    // does write are byte for byte those of a render with previews, and run.json says so.
+    const fs::path with = dir / "with", without = dir / "without";
+    Outcome r = ltmsim(render(scene, with, "--threads 2"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = ltmsim(render(scene, without, "--threads 2 --no-previews"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(fs::is_directory(with / "features"));
+    EXPECT_FALSE(fs::exists(without / "features"));
+    for (const char* f : {"ltm.npz", "features.exr", "features.npz", "reference.exr"})
+        EXPECT_EQ(slurp(with / f), slurp(without / f)) << f << " differs";
+    const auto previews = [](const fs::path& out) {
+        return ltm::io::read_json_file((out / "run.json").string(), "run record")["result"]["previews"];
+    };
+    EXPECT_EQ(previews(with), true);
+    EXPECT_EQ(previews(without), false);
+
+    const fs::path png = dir / "on.png", pat = dir / "pattern";
+    write_gray_png(png, kQ, kP, std::vector<std::uint8_t>(static_cast<size_t>(kP * kQ), 255));
+    r = ltmsim(render(scene, pat, "--threads 2 --no-previews --pattern '" + png.string() + "'"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_outputs(pat, {"image.exr", "image.npz", "run.json"}, {"image.png", "ltm.npz"});
+    EXPECT_EQ(previews(pat), false);
+}
