@@ -389,12 +389,11 @@ bool Tracer::in_glass(const Vec3& p) const {
     return true;
 }
 
-Tracer::Hit Tracer::on_surface(Hit h) const {
+void Tracer::on_surface(Hit& h) const {
     const SurfaceInfo& s = solid_.surfaces[h.tag];
     h.n_out = s.surface.normal(h.p) * static_cast<double>(s.normal_sign);
     h.offset = trace_tol::kSpawnOffsetBounds * point_error_bound(s.surface, h.p);
     h.found = true;
-    return h;
 }
 
 Tracer::Hit Tracer::propagate(const State& st, PathStats& stats, const Candidate* first) const {
@@ -424,40 +423,46 @@ Tracer::Hit Tracer::straight_hit(const State& st, PathStats& stats, const Candid
 Tracer::Hit Tracer::analytic_hit(const State& st, PathStats& stats) const {
     const Vec3& o = st.o;
     const Vec3& d = st.d;
-    Hit h;
+    // The nearest root and its surface; the hit record is made once, for the root that wins.
+    double best = INFINITY;
+    int tag = -1;
     for (const Patch& p : object_patches_) {
-        if (!may_hit(p, o, d, h.t)) continue;
-        const double t = patch_hit(p, o, d, 0.0, h.t);
-        if (t < h.t) {
-            h.t = t;
-            h.tag = p.tag;
+        if (!may_hit(p, o, d, best)) continue;
+        const double t = patch_hit(p, o, d, 0.0, best);
+        if (t < best) {
+            best = t;
+            tag = p.tag;
         }
     }
     if (user_patches_.size() <= kLinearScanLimit) {
         // A handful of defects: a box test each beats the cost of a BVH query.
         for (const Patch& p : user_patches_) {
-            if (!segment_near(p, o, d, h.t)) continue;
-            const double t = patch_hit(p, o, d, 0.0, h.t);
-            if (t < h.t) {
-                h.t = t;
-                h.tag = p.tag;
+            if (!segment_near(p, o, d, best)) continue;
+            const double t = patch_hit(p, o, d, 0.0, best);
+            if (t < best) {
+                best = t;
+                tag = p.tag;
             }
         }
     } else {
-        const Candidate c = embree_->intersect(o, d, 0.0, h.t);
-        if (c.hit && c.t < h.t) {
-            h.t = c.t;
-            h.tag = c.tag;
+        const Candidate c = embree_->intersect(o, d, 0.0, best);
+        if (c.hit && c.t < best) {
+            best = c.t;
+            tag = c.tag;
         }
     }
-    if (h.tag < 0) {
+    if (tag < 0) {
         // Nothing ahead: genuine in air; from inside a closed medium the geometry decides (a ray
         // spawned across the rim at a cap edge escapes), as in refined_hit.
         if (st.medium == Medium::Air) return {};
         return repair_medium(st, {}, stats);
     }
-    h.p = o + d * h.t;
-    return on_surface(h);
+    Hit h;
+    h.t = best;
+    h.tag = tag;
+    h.p = o + d * best;
+    on_surface(h);
+    return h;
 }
 
 Tracer::Hit Tracer::mesh_only_hit(const State& st, PathStats& stats, const Candidate* first) const {
@@ -601,7 +606,8 @@ Tracer::Hit Tracer::refined_hit(const State& st, PathStats& stats, const Candida
             continue;
         }
         best.p = o + d * best.t;
-        Hit h = on_surface(best);
+        Hit& h = best;
+        on_surface(h);
         const SurfaceInfo& s = table[h.tag];
         const Medium from = dot(d, h.n_out) < 0 ? s.outside : s.inside;
         if (from == st.medium) return h;
@@ -692,7 +698,8 @@ Tracer::Hit Tracer::grin_hit(const State& st, const MediumInfo& m, PathStats& st
     h.d_in = normalize(p);
     h.n_from = std::sqrt(std::max(n2, 0.0));
     if (scene_.object.absorption > 0) h.length = path.arc_length(h.t);
-    return on_surface(h);
+    on_surface(h);
+    return h;
 }
 
 // A segment through a TetGen region (TetWalk.h), from the tetrahedron holding the spawned point.
@@ -733,7 +740,8 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
     h.d_in = normalize(ex.p);
     h.n_from = std::sqrt(std::max(n2, 0.0));
     h.length = ex.arc;
-    return on_surface(h);
+    on_surface(h);
+    return h;
 }
 
 template <bool Principal>

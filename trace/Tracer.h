@@ -209,7 +209,7 @@ private:
     // Curved segments.
     Hit grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
     Hit walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
-    Hit on_surface(Hit h) const;  // the normal and spawn offset of an exact hit at h.p
+    void on_surface(Hit& h) const;  // fills in the normal and spawn offset of an exact hit at h.p
     // The pending branches of a split camera sample (defined in Tracer.cpp).
     struct SplitStack;
     // One path (one branch) from st until it ends. With `split` (sampled paths only), a Fresnel
