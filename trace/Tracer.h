@@ -196,7 +196,8 @@ private:
     // `first`: the triangle candidate of a camera ray from a packet (EmbreeScene::
     // intersect_packet), used in place of the segment's first Embree query.
     Hit propagate(const State& st, PathStats& stats, const Candidate* first = nullptr) const;
-    // Straight segments, by representation.
+    // Straight segments: the hit by representation, with the segment's direction, length and index.
+    Hit straight_step(const State& st, const MediumInfo& m, PathStats& stats, const Candidate* first) const;
     Hit straight_hit(const State& st, PathStats& stats, const Candidate* first) const;
     Hit analytic_hit(const State& st, PathStats& stats) const;
     Hit refined_hit(const State& st, PathStats& stats, const Candidate* first) const;
