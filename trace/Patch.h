@@ -48,9 +48,31 @@ inline bool segment_meets_box(const Vec3& o, const Vec3& d, double tmax, const A
     return true;
 }
 
+// The same test with the direction's reciprocals (reciprocals(d): inv[i] = 1 / d[i], 0 where d[i] == 0),
+// for a segment tested against several boxes: two roundings per slab instead of one, which the
+// culling margins (kCullMargin) absorb many times over.
+inline bool segment_meets_box(const Vec3& o, const Vec3& d, const Vec3& inv, double tmax, const Aabb& b) {
+    double t0 = 0, t1 = tmax;
+    for (int i = 0; i < 3; ++i) {
+        if (d[i] == 0) {
+            if (o[i] < b.lo[i] || o[i] > b.hi[i]) return false;
+            continue;
+        }
+        double a = (b.lo[i] - o[i]) * inv[i], c = (b.hi[i] - o[i]) * inv[i];
+        if (a > c) std::swap(a, c);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, c);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
 // Whether patch_hit(p, o, d, 0, tmax) can find a root at all (conservative: see kCullMargin and
-// kRimInsideMargin in TraceTolerance.h).
-inline bool may_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {
+// kRimInsideMargin in TraceTolerance.h). `inv`: the direction's reciprocals.
+inline Vec3 reciprocals(const Vec3& d) {
+    return {d.x != 0 ? 1.0 / d.x : 0.0, d.y != 0 ? 1.0 / d.y : 0.0, d.z != 0 ? 1.0 / d.z : 0.0};
+}
+inline bool may_hit(const Patch& p, const Vec3& o, const Vec3& d, const Vec3& inv, double tmax) {
     if (p.kind == Patch::Kind::Rim && tmax < INFINITY) {
         // Both ends inside the cylinder by the margin: a convex set, so no crossing between.
         const auto rho2 = [&](const Vec3& x) {
@@ -60,7 +82,7 @@ inline bool may_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {
         };
         if (rho2(o) < p.rho2_inside && rho2(o + d * tmax) < p.rho2_inside) return false;
     }
-    return p.cull.empty() || segment_meets_box(o, d, tmax, p.cull);
+    return p.cull.empty() || segment_meets_box(o, d, inv, tmax, p.cull);
 }
 
 // Does the segment o + t d, t in [0, tmax], come within the patch's bounding sphere?

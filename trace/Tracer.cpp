@@ -296,8 +296,9 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
     // The object's own patches, where no cutting defect removed them. The first root on the glass
     // boundary, not just the first root: a ray leaving a groove through its opening crosses the
     // face's surface inside the void before it meets the face again where it re-enters the glass.
+    const Vec3 inv = reciprocals(d);
     for (const Patch& p : object_patches_) {
-        if (p.tag == solved_patch || !may_hit(p, o, d, best.t < tmax ? best.t : tmax)) continue;
+        if (p.tag == solved_patch || !may_hit(p, o, d, inv, best.t < tmax ? best.t : tmax)) continue;
         double t = patch_hit(p, o, d, 0.0, best.t < tmax ? best.t : tmax);
         while (t < INFINITY && !on_glass_boundary(p.tag, o, d, t)) t = patch_hit(p, o, d, t, best.t < tmax ? best.t : tmax);
         if (t < INFINITY) {
@@ -431,8 +432,9 @@ Tracer::Hit Tracer::analytic_hit(const State& st, PathStats& stats) const {
     // The nearest root and its surface; the hit record is made once, for the root that wins.
     double best = INFINITY;
     int tag = -1;
+    const Vec3 inv = reciprocals(d);
     for (const Patch& p : object_patches_) {
-        if (!may_hit(p, o, d, best)) continue;
+        if (!may_hit(p, o, d, inv, best)) continue;
         const double t = patch_hit(p, o, d, 0.0, best);
         if (t < best) {
             best = t;
