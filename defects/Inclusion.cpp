@@ -7,7 +7,9 @@ namespace ltm {
 
 InclusionField::InclusionField(const Defect& d, double n_glass)
     : c_(d.center), e_(d.semi_axes), ft_(d.frame.transposed()), n0_(n_glass), dn_(d.delta_n),
-      smooth_(d.index_profile == IndexProfile::Smooth) {}
+      smooth_(d.index_profile == IndexProfile::Smooth) {
+    inv_e2_ = {1.0 / (e_.x * e_.x), 1.0 / (e_.y * e_.y), 1.0 / (e_.z * e_.z)};
+}
 
 double InclusionField::s(const Vec3& x) const {
     const Vec3 y = ft_ * (x - c_);
@@ -42,6 +44,47 @@ double InclusionField::hessian_bound(const Vec3& centre, double radius) const {
     const double gq2 = 16.0 * w_max / e2;
     const double adn = std::fabs(dn_);
     return 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
+}
+
+double InclusionField::extended_n2(const Vec3& x, double s_ext) const {
+    const double r2 = s(x);
+    if (!smooth_ || !(r2 < s_ext)) return n2(x);
+    const double n = n0_ + dn_ * (1.0 - r2) * (1.0 - r2);
+    return n * n;
+}
+
+double InclusionField::extended_laplacian_n2(const Vec3& x, double s_ext) const {
+    const double r2 = s(x);
+    if (!smooth_ || !(r2 < s_ext)) return 0.0;
+    const Vec3 y = ft_ * (x - c_);
+    const Vec3 sy{y.x * inv_e2_.x, y.y * inv_e2_.y, y.z * inv_e2_.z};
+    const double grad_s2 = 4.0 * length2(sy), lap_s = 2.0 * (inv_e2_.x + inv_e2_.y + inv_e2_.z);
+    const double u = 1.0 - r2, q = u * u;
+    const double lap_q = 2.0 * grad_s2 - 2.0 * u * lap_s, grad_q2 = 4.0 * q * grad_s2;
+    return 2.0 * dn_ * (n0_ + dn_ * q) * lap_q + 2.0 * dn_ * dn_ * grad_q2;
+}
+
+double InclusionField::extended_hessian_bound(const Vec3& centre, double radius) const {
+    if (!smooth_) return 0.0;
+    const double emin = min_semi_axis();
+    const double rho_c = std::sqrt(s(centre));
+    const double rho_lo = std::max(0.0, rho_c - radius / emin), rho_hi = rho_c + radius / emin;
+    if (rho_lo >= 1.0) return 0.0;  // outside the ellipsoid: no path uses the mesh there
+    const double s_lo = rho_lo * rho_lo, s_hi = rho_hi * rho_hi;
+    const double q_max = std::max((1.0 - s_lo) * (1.0 - s_lo), (s_hi - 1.0) * (s_hi - 1.0));
+    auto w = [](double t) { return t * (1.0 - t) * (1.0 - t); };
+    double w_max = std::max(w(s_lo), w(s_hi));
+    if (s_lo <= 1.0 / 3.0 && 1.0 / 3.0 <= s_hi) w_max = std::max(w_max, w(1.0 / 3.0));
+    const double e2 = emin * emin;
+    const double d2q = (s_hi <= 1.0 ? 4.0 * (1.0 + s_hi) : 12.0 * s_hi - 4.0) / e2;
+    const double gq2 = 16.0 * w_max / e2;
+    const double adn = std::fabs(dn_);
+    return 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
+}
+
+double InclusionField::straddling_hessian_floor() const {
+    const double emin = min_semi_axis();
+    return 16.0 * std::fabs(dn_) * std::fabs(n0_) / (emin * emin);
 }
 
 }  // namespace ltm

@@ -96,8 +96,32 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
         // elongation; finer facets would only make TetGen refine along them.
         const double tol = 0.02 * kRegionScale * f->max_semi_axis();
         r.boundary = tessellate_ellipsoid(defect->center, defect->frame, defect->semi_axes * kRegionScale, tol, 0).mesh;
-        r.n2 = [f](const Vec3& x) { return f->n2(x); };
-        r.hessian_bound = [f](const Vec3& c, double radius) { return f->hessian_bound(c, radius); };
+        // What the mesh interpolates. Two things make the lattice's interpolant follow the field
+        // more closely than the tolerance alone:
+        //  * the profile's polynomial continued beyond the ellipsoid (extended_n2), to s_ext: the
+        //    field's curvature jumps at s = 1, and the tetrahedra straddling it would otherwise
+        //    interpolate a kink (a layer of biased gradient that grazing paths cross lengthwise);
+        //    every tetrahedron the criterion accepts with part of it inside spans less than
+        //    2 sqrt(2 t / M_floor) (M_floor: straddling_hessian_floor), so s_ext = (1 + that /
+        //    e_min)^2 covers all of them, and beyond it n is the glass's again;
+        //  * the lattice's mean interpolation error taken out of the vertex values. Linear
+        //    interpolation of f = x^T H x / 2 over a tetrahedron errs by (1/10) sum_i (v_i - c)^T H
+        //    (v_i - c) on average (c its centroid; the simplex's second moment is 1/20 of
+        //    sum_i (v_i - c)(v_i - c)^T); BCC's Delaunay tetrahedra, in their cubic orientations,
+        //    have sum_i (v_i - c)(v_i - c)^T = (5 a^2 / 12) I on average, so the mean error is
+        //    a^2 tr H / 24, a smooth bias field whose gradient bends every path by O(h^2) the
+        //    same way. Subtracting it at the vertices leaves the periodic, zero-mean part that
+        //    averages out along a path. It keeps the tolerance: If - f lies in [0, M r^2 / 2] and
+        //    the subtracted a^2 tr H / 24 <= a^2 M / 8 < t (lattice_spacing), so |If - f| < t.
+        const double t = opt.index_tolerance, emin = f->min_semi_axis();
+        const double reach = 2.0 * std::sqrt(2.0 * t / f->straddling_hessian_floor()) / emin;
+        const double s_ext = (1.0 + reach) * (1.0 + reach);
+        r.lattice_hessian = f->extended_hessian_bound(defect->center, std::sqrt(s_ext) * emin);
+        const double a = lattice_spacing(t, r.lattice_hessian);
+        r.n2 = [f, s_ext, a](const Vec3& x) {
+            return f->extended_n2(x, s_ext) - a * a / 24.0 * f->extended_laplacian_n2(x, s_ext);
+        };
+        r.hessian_bound = [f](const Vec3& c, double radius) { return f->extended_hessian_bound(c, radius); };
         // rho is 1/e_min-Lipschitz: (kLatticeScale - rho) e_min is a lower bound of the depth below
         // the ellipsoid rho = kLatticeScale.
         r.depth = [f](const Vec3& x) { return (kLatticeScale - std::sqrt(f->s(x))) * f->min_semi_axis(); };

@@ -493,7 +493,8 @@ RawMesh mesh_with_tetgen(const TetRegion& region, const Boundary& b) {
     // The lattice, inserted with -i.
     Aabb bbox;
     for (const Vec3& p : b.points) bbox.extend(p);
-    const double M = region.hessian_bound(0.5 * (bbox.lo + bbox.hi), 0.5 * length(bbox.hi - bbox.lo));
+    const double M = region.lattice_hessian > 0 ? region.lattice_hessian
+                                                : region.hessian_bound(0.5 * (bbox.lo + bbox.hi), 0.5 * length(bbox.hi - bbox.lo));
     const std::vector<Vec3> lattice = lattice_points(region, b, lattice_spacing(region.tolerance, M));
     if (!lattice.empty()) {
         addin.firstnumber = 0;

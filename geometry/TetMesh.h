@@ -56,26 +56,37 @@ struct TetRegion {
     // inside; any lower bound of it will do). With it, the interior is filled with a regular
     // lattice (see tetrahedralize); without it, TetGen's Delaunay refinement fills it alone.
     std::function<double(const Vec3&)> depth;
+    // The Hessian bound the lattice is spaced for (lattice_spacing); 0: hessian_bound over the
+    // ball around the boundary's bounding box. A region whose field only matters in part of it
+    // (an inclusion's mesh is used inside its ellipsoid) gives the bound over that part.
+    double lattice_hessian = 0;
 };
 
 // The lattice an interior is filled with: body-centred cubic, of cube edge `a`, turned by a fixed
-// generic rotation. Why a lattice: piecewise-linear interpolation of a smooth field errs in its
-// gradient by O(h M) (the field's curvature over a tetrahedron), and a path bends with that
-// gradient. On an unstructured mesh the errors of the ~L/h tetrahedra a path crosses add like a
-// random walk, O(h^1.5) in the end. On a lattice the gradient error is the same periodic function
-// in every cell, with zero mean over a cell, and along a path that crosses the cells at a generic
-// (irrational) angle it averages out, leaving O(h^2) = O(tolerance). Measured for the 2.5 mm,
-// delta_n = 0.02 inclusion of scenes/examples/inclusion-smooth.yaml (display 60 mm behind; rays on
-// a 0.2 mm grid; docs/grin.md): unstructured, 1.9 million tetrahedra at the tolerance 1e-4, display
-// errors 0.018 mm at most and 0.0037 mm on average, converging as tolerance^0.7; lattice,
-// 1.5 million tetrahedra at 1e-4, 0.0072 mm and 0.0015 mm, the average converging as
-// tolerance^1.0. The rotation keeps telecentric rays (along z) off the lattice's rows, along which
-// the periodic error would not average. BCC's Delaunay tetrahedra are congruent, with circumradius
-// a sqrt(5) / 4, which is their smallest enclosing radius (the circumcentre lies inside), so
-// a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where ||D^2 n^2|| <= M; lattice_spacing
-// returns 0.9 of that, so that rounding never tips a lattice tetrahedron over the bound (a split
-// would break the regularity locally).
-inline constexpr double kLatticeAngles[3] = {37.3, 23.7, 11.1};  // degrees, rotation_from_euler_deg
+// rotation. Why a lattice: piecewise-linear interpolation of a smooth field errs in its gradient
+// by O(h M) (the field's curvature over a tetrahedron), and a path bends with that gradient. On
+// an unstructured mesh the errors of the ~L/h tetrahedra a path crosses add like a random walk,
+// O(h^1.5) in the end. On a lattice the gradient error is the same periodic function in every
+// cell, and along a path that crosses the cells at a generic angle it averages out, leaving
+// O(h^2) = O(tolerance). Two things decide the constant (docs/grin.md):
+//  * the error's mean over a cell is not zero (a^2 tr(D^2 n^2) / 24 for BCC, a smooth bias
+//    field); an inclusion's region takes it out of its vertex values (defects/SolidBuilder.cpp);
+//  * a path nearly parallel to a low-order lattice plane does not average the periodic part: the
+//    mode k of the error adds up as 1 / |k . d|. The rotation puts telecentric rays (along z) far
+//    from every such plane: z in the lattice frame is d = (0.1146, 0.4419, 0.8897), which
+//    minimises the resonance score of scripts/lattice-direction (9.14, at most 11.1 within 5
+//    degrees of z; the rotation used before, (37.3, 23.7, 11.1), scored 11.4 and 14.9). The
+//    rotation about z is immaterial for rays along z.
+// Measured for the 2.5 mm, delta_n = 0.02 inclusion of scenes/examples/inclusion-smooth.yaml at
+// the tolerance 1e-4 (display 60 mm behind; rays on a 0.2 mm grid; bench/bench_grin.cpp e):
+// unstructured, 1.9 million tetrahedra, display errors 0.018 mm at most, 0.0037 mm on average;
+// the lattice without the bias correction, at the former rotation, 2.0 million, 0.0054 and
+// 0.0013 mm; with both, 2.4 million, 0.0018 and 0.00044 mm. BCC's Delaunay tetrahedra are
+// congruent, with circumradius a sqrt(5) / 4, which is their smallest enclosing radius (the
+// circumcentre lies inside), so a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where
+// ||D^2 n^2|| <= M; lattice_spacing returns 0.9 of that, so that rounding never tips a lattice
+// tetrahedron over the bound (a split would break the regularity locally).
+inline constexpr double kLatticeAngles[3] = {26.41, -6.58, 0.0};  // degrees, rotation_from_euler_deg
 double lattice_spacing(double tolerance, double hessian_bound);
 
 // A TetGen failure (invalid input, an internal error code, or too many tetrahedra), reported with
