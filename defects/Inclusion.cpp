@@ -64,8 +64,9 @@ double InclusionField::extended_laplacian_n2(const Vec3& x, double s_ext) const 
     return 2.0 * dn_ * (n0_ + dn_ * q) * lap_q + 2.0 * dn_ * dn_ * grad_q2;
 }
 
-double InclusionField::extended_hessian_bound(const Vec3& centre, double radius) const {
+double InclusionField::extended_hessian_bound(const Vec3& centre, double radius, double s_ext) const {
     if (!smooth_) return 0.0;
+    if (!(s_ext > 1.0)) return hessian_bound(centre, radius);
     const double emin = min_semi_axis();
     const double rho_c = std::sqrt(s(centre));
     const double rho_lo = std::max(0.0, rho_c - radius / emin), rho_hi = rho_c + radius / emin;
@@ -79,12 +80,13 @@ double InclusionField::extended_hessian_bound(const Vec3& centre, double radius)
     const double d2q = (s_hi <= 1.0 ? 4.0 * (1.0 + s_hi) : 12.0 * s_hi - 4.0) / e2;
     const double gq2 = 16.0 * w_max / e2;
     const double adn = std::fabs(dn_);
-    return 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
-}
-
-double InclusionField::straddling_hessian_floor() const {
-    const double emin = min_semi_axis();
-    return 16.0 * std::fabs(dn_) * std::fabs(n0_) / (emin * emin);
+    double m = 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
+    if (s_hi > s_ext) {
+        const double q = (s_hi - 1.0) * (s_hi - 1.0);
+        const double jump = 2.0 * std::fabs(n0_) * adn * q + dn_ * dn_ * q * q;
+        m += radius > 0 ? 2.0 * jump / (radius * radius) : 0.0;
+    }
+    return m;
 }
 
 }  // namespace ltm

@@ -43,15 +43,16 @@ public:
     //   lap n^2 = 2 dn (n0 + dn q) lap q + 2 dn^2 |grad q|^2,
     //   lap q = 2 |grad s|^2 - 2 (1 - s) lap s,  |grad s|^2 = 4 |S y|^2,  lap s = 2 tr S.
     double extended_laplacian_n2(const Vec3& x, double s_ext) const;
-    // An upper bound on ||D^2 extended_n2||_2 over the ball, valid while the ball stays within
-    // s < s_ext (0 when it lies outside the ellipsoid: no path uses it there). As hessian_bound,
-    // with, for s > 1, ||D^2 q|| <= 8 s / e_min^2 + 4 (s - 1) / e_min^2 = (12 s - 4) / e_min^2
-    // and q, s (1 - s)^2 increasing in s.
-    double extended_hessian_bound(const Vec3& centre, double radius) const;
-    // A lower bound on what hessian_bound and extended_hessian_bound return for any ball that
-    // reaches s >= 1 from inside: there ||D^2 q|| is bounded by 8 / e_min^2 or more and the factor
-    // n0 + |dn| q_max by n0 or more, so 16 |dn| n0 / e_min^2.
-    double straddling_hessian_floor() const;
+    // The bound of the tetrahedral criterion (geometry/TetMesh.h: M r^2 / 2 <= tolerance) for a
+    // mesh of extended_n2 (s_ext > 1) over the ball (centre, radius): 0 when the ball lies outside
+    // the ellipsoid (no path uses the mesh there); with s_ext <= 1, hessian_bound. Otherwise the
+    // polynomial's Hessian bound over the whole ball (as hessian_bound, with, for s > 1,
+    // ||D^2 q|| <= 8 s / e_min^2 + 4 (s - 1) / e_min^2 = (12 s - 4) / e_min^2 and q, s (1 - s)^2
+    // increasing), and where the ball reaches beyond s_ext, where the mesh holds n_glass^2
+    // instead of the polynomial, 2 J / radius^2 more: the interpolant of that difference is at
+    // most J = max |(n0 + dn q)^2 - n0^2| <= 2 n0 |dn| q + dn^2 q^2 there (q at the ball's
+    // largest s), which M r^2 / 2 then covers.
+    double extended_hessian_bound(const Vec3& centre, double radius, double s_ext) const;
 
     const Vec3& center() const { return c_; }
     double max_semi_axis() const;

@@ -58,6 +58,8 @@ namespace {
 
 // A smooth inclusion's TetGen region and its lattice, in units of its ellipsoid (index_region).
 constexpr double kRegionScale = 1.25, kLatticeScale = 1.12;
+// The bias-corrected lattice's bound over the plain one's (index_region: 1.027 needed).
+constexpr double kCorrectedLatticeFactor = 1.05;
 
 // The mesh whose faces lie outside the surface they approximate: vertices pushed out along their
 // (area-weighted) normals by `offset`; twice the chord error makes a facet inscribed within e of a
@@ -100,10 +102,13 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
         // more closely than the tolerance alone:
         //  * the profile's polynomial continued beyond the ellipsoid (extended_n2), to s_ext: the
         //    field's curvature jumps at s = 1, and the tetrahedra straddling it would otherwise
-        //    interpolate a kink (a layer of biased gradient that grazing paths cross lengthwise);
-        //    every tetrahedron the criterion accepts with part of it inside spans less than
-        //    2 sqrt(2 t / M_floor) (M_floor: straddling_hessian_floor), so s_ext = (1 + that /
-        //    e_min)^2 covers all of them, and beyond it n is the glass's again;
+        //    interpolate a kink (a layer of biased gradient that grazing paths cross lengthwise).
+        //    s_ext = (1 + 2 r / e_min)^2, with r the lattice tetrahedron's enclosing radius,
+        //    covers every lattice tetrahedron with part of it inside; beyond, n is the glass's
+        //    again (and extended_hessian_bound makes TetGen split any other tetrahedron that would
+        //    reach across both). Where that reach exceeds the lattice's own extent
+        //    (kLatticeScale: tetrahedra coarse against the inclusion, as for weak striae) the
+        //    field is meshed as it is (s_ext = 1);
         //  * the lattice's mean interpolation error taken out of the vertex values. Linear
         //    interpolation of f = x^T H x / 2 over a tetrahedron errs by (1/10) sum_i (v_i - c)^T H
         //    (v_i - c) on average (c its centroid; the simplex's second moment is 1/20 of
@@ -111,17 +116,28 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
         //    have sum_i (v_i - c)(v_i - c)^T = (5 a^2 / 12) I on average, so the mean error is
         //    a^2 tr H / 24, a smooth bias field whose gradient bends every path by O(h^2) the
         //    same way. Subtracting it at the vertices leaves the periodic, zero-mean part that
-        //    averages out along a path. It keeps the tolerance: If - f lies in [0, M r^2 / 2] and
-        //    the subtracted a^2 tr H / 24 <= a^2 M / 8 < t (lattice_spacing), so |If - f| < t.
+        //    averages out along a path. The criterion accounts for it: with the bias written as
+        //    tr(H alpha I) / 2, alpha = a^2 / 12, the corrected error at x is
+        //    tr(H (S(x) - alpha I)) / 2 with S(x) = sum_i l_i (v_i - x)(v_i - x)^T >= 0 and
+        //    tr S <= r^2 (Waldron), so at most M (r^2 + alpha) / 2: the bound handed to TetGen is
+        //    M (1 + alpha / r^2). A lattice tetrahedron (r^2 = 5 a^2 / 16) then needs 1.027 times
+        //    the bound the plain lattice does; the lattice is spaced for 1.05 times it, so that it
+        //    passes with 2 % to spare (TetGen's optimisation moves some of its tetrahedra).
         const double t = opt.index_tolerance, emin = f->min_semi_axis();
-        const double reach = 2.0 * std::sqrt(2.0 * t / f->straddling_hessian_floor()) / emin;
-        const double s_ext = (1.0 + reach) * (1.0 + reach);
-        r.lattice_hessian = f->extended_hessian_bound(defect->center, std::sqrt(s_ext) * emin);
-        const double a = lattice_spacing(t, r.lattice_hessian);
-        r.n2 = [f, s_ext, a](const Vec3& x) {
-            return f->extended_n2(x, s_ext) - a * a / 24.0 * f->extended_laplacian_n2(x, s_ext);
+        const double m_inside = f->hessian_bound(defect->center, emin);  // over s in [0, 1]
+        const double reach = 2.0 * (lattice_spacing(t, m_inside) * std::sqrt(5.0) / 4.0) / emin;
+        const double s_ext = 1.0 + reach <= kLatticeScale ? (1.0 + reach) * (1.0 + reach) : 1.0;
+        // The bound over s in [0, s_ext] (the ball of radius sqrt(s_ext) e_min about the centre),
+        // which only raises the bound: the spacing shrinks, and the reach with it.
+        r.lattice_hessian = kCorrectedLatticeFactor * f->extended_hessian_bound(defect->center, std::sqrt(s_ext) * emin, s_ext);
+        const double a = lattice_spacing(t, r.lattice_hessian), alpha = a * a / 12.0;
+        r.n2 = [f, s_ext, alpha](const Vec3& x) {
+            return f->extended_n2(x, s_ext) - 0.5 * alpha * f->extended_laplacian_n2(x, s_ext);
         };
-        r.hessian_bound = [f](const Vec3& c, double radius) { return f->extended_hessian_bound(c, radius); };
+        r.hessian_bound = [f, s_ext, alpha](const Vec3& c, double radius) {
+            const double m = f->extended_hessian_bound(c, radius, s_ext);
+            return m > 0 && radius > 0 ? m * (1.0 + alpha / (radius * radius)) : m;
+        };
         // rho is 1/e_min-Lipschitz: (kLatticeScale - rho) e_min is a lower bound of the depth below
         // the ellipsoid rho = kLatticeScale.
         r.depth = [f](const Vec3& x) { return (kLatticeScale - std::sqrt(f->s(x))) * f->min_semi_axis(); };

@@ -81,7 +81,8 @@ struct TetRegion {
 // the tolerance 1e-4 (display 60 mm behind; rays on a 0.2 mm grid; bench/bench_grin.cpp e):
 // unstructured, 1.9 million tetrahedra, display errors 0.018 mm at most, 0.0037 mm on average;
 // the lattice without the bias correction, at the former rotation, 2.0 million, 0.0054 and
-// 0.0013 mm; with both, 2.4 million, 0.0018 and 0.00044 mm. BCC's Delaunay tetrahedra are
+// 0.0013 mm; with the correction (and the continued profile of defects/SolidBuilder.cpp) at this
+// rotation, 2.5 million, 0.0016 and 0.00034 mm. BCC's Delaunay tetrahedra are
 // congruent, with circumradius a sqrt(5) / 4, which is their smallest enclosing radius (the
 // circumcentre lies inside), so a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where
 // ||D^2 n^2|| <= M; lattice_spacing returns 0.9 of that, so that rounding never tips a lattice
