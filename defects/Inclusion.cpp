@@ -28,22 +28,27 @@ double InclusionField::n(const Vec3& x) const {
 double InclusionField::max_semi_axis() const { return std::max({e_.x, e_.y, e_.z}); }
 double InclusionField::min_semi_axis() const { return std::min({e_.x, e_.y, e_.z}); }
 
+double InclusionField::curvature_bound(double s_lo, double s_hi) const {
+    // q = (1 - s)^2 is largest at an end of [s_lo, s_hi]; s (1 - s)^2 peaks at s = 1/3 on [0, 1]
+    // and increases beyond 1.
+    const double q_max = std::max((1.0 - s_lo) * (1.0 - s_lo), (s_hi - 1.0) * (s_hi - 1.0));
+    auto w = [](double t) { return t * (1.0 - t) * (1.0 - t); };
+    double w_max = std::max(w(s_lo), w(s_hi));
+    if (s_lo <= 1.0 / 3.0 && 1.0 / 3.0 <= s_hi) w_max = s_hi > 1.0 ? std::max(w(1.0 / 3.0), w(s_hi)) : w(1.0 / 3.0);
+    const double emin = min_semi_axis(), e2 = emin * emin;
+    const double d2q = (s_hi <= 1.0 ? 4.0 * (1.0 + s_hi) : 12.0 * s_hi - 4.0) / e2;
+    const double gq2 = 16.0 * w_max / e2;
+    const double adn = std::fabs(dn_);
+    return 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
+}
+
 double InclusionField::hessian_bound(const Vec3& centre, double radius) const {
     if (!smooth_) return 0.0;
     const double emin = min_semi_axis();
     const double rho_c = std::sqrt(s(centre));
     const double rho_lo = std::max(0.0, rho_c - radius / emin), rho_hi = rho_c + radius / emin;
     if (rho_lo >= 1.0) return 0.0;  // the ball lies outside the inclusion: n is constant there
-    const double s_lo = rho_lo * rho_lo, s_hi = std::min(1.0, rho_hi * rho_hi);
-    // q = (1 - s)^2 is largest at the smallest s; s (1 - s)^2 peaks at s = 1/3 on [0, 1].
-    const double q_max = (1.0 - s_lo) * (1.0 - s_lo);
-    auto w = [](double t) { return t * (1.0 - t) * (1.0 - t); };
-    const double w_max = (s_lo <= 1.0 / 3.0 && 1.0 / 3.0 <= s_hi) ? w(1.0 / 3.0) : std::max(w(s_lo), w(s_hi));
-    const double e2 = emin * emin;
-    const double d2q = 4.0 * (1.0 + s_hi) / e2;
-    const double gq2 = 16.0 * w_max / e2;
-    const double adn = std::fabs(dn_);
-    return 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
+    return curvature_bound(rho_lo * rho_lo, std::min(1.0, rho_hi * rho_hi));
 }
 
 double InclusionField::extended_n2(const Vec3& x, double s_ext) const {
@@ -71,18 +76,10 @@ double InclusionField::extended_hessian_bound(const Vec3& centre, double radius,
     const double rho_c = std::sqrt(s(centre));
     const double rho_lo = std::max(0.0, rho_c - radius / emin), rho_hi = rho_c + radius / emin;
     if (rho_lo >= 1.0) return 0.0;  // outside the ellipsoid: no path uses the mesh there
-    const double s_lo = rho_lo * rho_lo, s_hi = rho_hi * rho_hi;
-    const double q_max = std::max((1.0 - s_lo) * (1.0 - s_lo), (s_hi - 1.0) * (s_hi - 1.0));
-    auto w = [](double t) { return t * (1.0 - t) * (1.0 - t); };
-    double w_max = std::max(w(s_lo), w(s_hi));
-    if (s_lo <= 1.0 / 3.0 && 1.0 / 3.0 <= s_hi) w_max = std::max(w_max, w(1.0 / 3.0));
-    const double e2 = emin * emin;
-    const double d2q = (s_hi <= 1.0 ? 4.0 * (1.0 + s_hi) : 12.0 * s_hi - 4.0) / e2;
-    const double gq2 = 16.0 * w_max / e2;
-    const double adn = std::fabs(dn_);
-    double m = 2.0 * adn * (std::fabs(n0_) + adn * q_max) * d2q + 2.0 * dn_ * dn_ * gq2;
+    const double s_hi = rho_hi * rho_hi;
+    double m = curvature_bound(rho_lo * rho_lo, s_hi);
     if (s_hi > s_ext) {
-        const double q = (s_hi - 1.0) * (s_hi - 1.0);
+        const double q = (s_hi - 1.0) * (s_hi - 1.0), adn = std::fabs(dn_);
         const double jump = 2.0 * std::fabs(n0_) * adn * q + dn_ * dn_ * q * q;
         m += radius > 0 ? 2.0 * jump / (radius * radius) : 0.0;
     }

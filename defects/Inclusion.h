@@ -59,6 +59,10 @@ public:
     double min_semi_axis() const;
 
 private:
+    // The bound of hessian_bound's formula over s in [s_lo, s_hi] (s_hi may exceed 1: the
+    // polynomial continued, extended_hessian_bound).
+    double curvature_bound(double s_lo, double s_hi) const;
+
     Vec3 c_, e_;
     Vec3 inv_e2_;  // 1 / e_i^2
     Mat3 ft_;  // F^T
