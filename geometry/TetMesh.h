@@ -45,7 +45,10 @@ struct TetRegion {
     std::string name;                      // names the region in errors: "defects[2]", "object"
     TriMesh boundary;                      // closed, outward, two-manifold, not self-intersecting
     std::function<double(const Vec3&)> n2; // the field
-    // An upper bound on ||D^2 n^2||_2 over the ball (centre, radius).
+    // An upper bound on ||D^2 n^2||_2 over the ball (centre, radius); in general, any M for which
+    // M radius^2 / 2 bounds the error of the interpolated vertex values against the field over a
+    // tetrahedron with that enclosing ball (an inclusion's corrected values add to the Hessian
+    // bound: defects/SolidBuilder.cpp).
     std::function<double(const Vec3& centre, double radius)> hessian_bound;
     double tolerance = 1e-4;               // on n^2: M r^2 / 2 <= tolerance in every tetrahedron
     // Clipping: false when the ball (centre, radius) certainly lies outside the part of the region
