@@ -233,17 +233,25 @@ Channels read_exr_file(const std::string& path, int& width, int& height) {
         height = static_cast<int>(h);
         Imf::FrameBuffer fb;
         const Imf::ChannelList& list = file.header().channels();
+        std::int64_t count = 0;
         for (auto it = list.begin(); it != list.end(); ++it) {
             if (it.channel().xSampling != 1 || it.channel().ySampling != 1)
                 bad(std::string("channel '") + it.name() + "' is subsampled, which is not supported");
-            out.emplace_back(it.name(), std::vector<float>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h)));
+            ++count;
         }
-        if (out.empty()) bad("it has no channels");
+        if (count == 0) bad("it has no channels");
+        // Checked before anything is allocated: the header alone declares the size, and a few
+        // corrupt bytes of it would otherwise ask for gigabytes (found by fuzz/fuzz_image).
+        if (w * h > kMaxImageValues / count)
+            bad("it declares " + std::to_string(w) + " x " + std::to_string(h) + " pixels in " + std::to_string(count) +
+                " channels, more than the " + std::to_string(kMaxImageValues) + " values an image may hold");
+        if (!file.isComplete()) bad("the file is truncated or incomplete (some pixels are missing)");
+        for (auto it = list.begin(); it != list.end(); ++it)
+            out.emplace_back(it.name(), std::vector<float>(static_cast<std::size_t>(w) * static_cast<std::size_t>(h)));
         for (auto& [name, values] : out)
             fb.insert(name.c_str(), Imf::Slice::Make(Imf::FLOAT, values.data(), dw, sizeof(float),
                                                      sizeof(float) * static_cast<std::size_t>(w)));
         file.setFrameBuffer(fb);
-        if (!file.isComplete()) bad("the file is truncated or incomplete (some pixels are missing)");
         file.readPixels(dw.min.y, dw.max.y);
     } catch (const ReadError&) {
         throw;

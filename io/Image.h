@@ -48,7 +48,11 @@ struct Image {
 //    image (whatever its name); otherwise it must have channels R, G and B, which give a
 //    3-channel image in that order (other channels, e.g. A, are ignored); anything else is an
 //    error listing the file's channels. Values are taken as stored (they may exceed [0, 1]).
+// An OpenEXR file whose header declares more than kMaxImageValues values (pixels times channels,
+// 2^28: 1 GiB of floats, e.g. a 16384 x 16384 single-channel or 8192 x 8192 RGBA image) is an
+// error, found before anything is allocated.
 Image read_image(const std::string& path);
+inline constexpr std::int64_t kMaxImageValues = std::int64_t{1} << 28;
 
 // The single float value per pixel a display pattern needs, in pixel order (row-major from the
 // top row): 1 channel: the values as they are; 3 channels: the Rec. 709 / sRGB relative luminance

@@ -659,3 +659,37 @@ TEST(PatternValues, GrayIsUnchangedAndRgbIsRec709Luminance) {
     Image two(2, 2, 2);
     EXPECT_THROW(ltm::pattern_values(two), std::invalid_argument);
 }
+
+// A header that declares a huge data window (what fuzz/fuzz_image found: a few changed bytes asked
+// for 5 GB) is refused from the header alone, before any pixel buffer is allocated: the message
+// names the declared size, not memory or truncation.
+TEST_F(ImageTest, ExrDeclaringTooManyValuesIsRefusedBeforeAllocating) {
+    ltm::write_exr(path("small.exr"), 4, 3, {{"Y", std::vector<float>(12, 0.5f)}});
+    std::string exr = slurp(path("small.exr"));
+    // dataWindow: name, type "box2i", size 16, then min.x, min.y, max.x, max.y (little-endian int32)
+    const std::string key = std::string("dataWindow") + '\0' + "box2i" + '\0';
+    const size_t at = exr.find(key);
+    ASSERT_NE(at, std::string::npos);
+    const size_t box = at + key.size() + 4;
+    {  // 80 rows of 4 million pixels: five ZIP chunks (their offsets are read from what follows
+        // the one real chunk's), rows OpenEXR itself accepts
+        const std::int32_t x = 3999999, y = 79;
+        std::memcpy(&exr[box + 8], &x, sizeof x);
+        std::memcpy(&exr[box + 12], &y, sizeof y);
+    }
+    // OpenEXR scans the file for the chunks its offset table does not hold: zeros to scan
+    spit(path("huge.exr"), exr + std::string(1 << 16, '\0'));
+    const std::string msg = message_of([&] { ltm::read_image(path("huge.exr")); });
+    EXPECT_NE(msg.find("cannot read image '" + path("huge.exr") + "'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("declares 4000000 x 80 pixels in 1 channels, more than the 268435456 values"),
+              std::string::npos)
+        << msg;
+    // At the limit's side of it, a declared window that fits is read on (and is then truncated).
+    {
+        const std::int32_t v = 999;
+        std::memcpy(&exr[box + 8], &v, sizeof v);
+    }
+    spit(path("big.exr"), exr);
+    const std::string msg2 = message_of([&] { ltm::read_image(path("big.exr")); });
+    EXPECT_EQ(msg2.find("values an image may hold"), std::string::npos) << msg2;
+}
