@@ -414,6 +414,7 @@ struct RawMesh {
     std::vector<Vec3> vertices;
     std::vector<std::array<std::uint32_t, 4>> tets;
     std::vector<std::array<std::int32_t, 4>> neighbors;
+    LatticeFrame lattice;  // spacing 0 without a lattice
 };
 
 RawMesh raw_mesh(const TetRegion& region, const tetgenio& out) {
@@ -458,8 +459,8 @@ RawMesh raw_mesh(const TetRegion& region, const tetgenio& out) {
 
 // The rotated BCC lattice points at least 0.6 a deep in the region (TetMesh.h, lattice_spacing):
 // the corners of the cubes of edge a and their centres, in the lattice's own frame R^T x, over
-// the boundary's bounding box.
-std::vector<Vec3> lattice_points(const TetRegion& region, const Boundary& b, double a) {
+// the boundary's bounding box; `frame` says where it lies (LatticePhase.h).
+std::vector<Vec3> lattice_points(const TetRegion& region, const Boundary& b, double a, LatticeFrame* frame) {
     std::vector<Vec3> out;
     if (!region.depth || !(a > 0)) return out;
     const Mat3 R = rotation_from_euler_deg({kLatticeAngles[0], kLatticeAngles[1], kLatticeAngles[2]});
@@ -483,6 +484,7 @@ std::vector<Vec3> lattice_points(const TetRegion& region, const Boundary& b, dou
                     const Vec3 x = R * (box.lo + Vec3{(i + o) * a, (j + o) * a, (k + o) * a});
                     if (region.depth(x) >= margin) out.push_back(x);
                 }
+    if (!out.empty()) *frame = {R, box.lo, a};
     return out;
 }
 
@@ -495,7 +497,8 @@ RawMesh mesh_with_tetgen(const TetRegion& region, const Boundary& b) {
     for (const Vec3& p : b.points) bbox.extend(p);
     const double M = region.lattice_hessian > 0 ? region.lattice_hessian
                                                 : region.hessian_bound(0.5 * (bbox.lo + bbox.hi), 0.5 * length(bbox.hi - bbox.lo));
-    const std::vector<Vec3> lattice = lattice_points(region, b, lattice_spacing(region.tolerance, M));
+    LatticeFrame frame;
+    const std::vector<Vec3> lattice = lattice_points(region, b, lattice_spacing(region.tolerance, M), &frame);
     if (!lattice.empty()) {
         addin.firstnumber = 0;
         addin.numberofpoints = static_cast<int>(lattice.size());
@@ -533,7 +536,9 @@ RawMesh mesh_with_tetgen(const TetRegion& region, const Boundary& b) {
                                  "made {})",
                                  region.max_tets, region.tolerance, out.numberoftetrahedra));
     if (out.numberoftetrahedra <= 0) fail(region, "TetGen made no tetrahedra");
-    return raw_mesh(region, out);
+    RawMesh r = raw_mesh(region, out);
+    r.lattice = frame;
+    return r;
 }
 
 // ---- bisection of what TetGen left -------------------------------------------------------------
@@ -782,6 +787,10 @@ TetMesh tetrahedralize(const TetRegion& region, StageReport* report) {
     std::vector<std::int64_t> new_vertex(raw.vertices.size(), -1);
     TetMesh mesh;
     mesh.name = region.name;
+    if (region.hessian) {
+        mesh.lattice = raw.lattice;
+        mesh.hessian = region.hessian;
+    }
     size_t kept = 0;
     for (size_t t = 0; t < nt; ++t) {
         auto& v = raw.tets[t];

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "geometry/LatticePhase.h"
 #include "geometry/StageReport.h"
 #include "geometry/TriMesh.h"
 #include "geometry/Vec3.h"
@@ -34,6 +35,11 @@ struct TetMesh {
     std::vector<std::array<std::int32_t, 4>> neighbors;
     double error_bound = 0;      // the largest M r^2 / 2 over the tetrahedra (<= the tolerance)
     std::string name;            // the region's name, e.g. "defects[2]" or "object"
+    // The lattice the interior was filled with, and the field's Hessian D^2 n^2, for the end
+    // correction of paths entering and leaving it (LatticePhase.h); spacing 0 and empty when the
+    // region gave no `hessian` or has no lattice.
+    LatticeFrame lattice;
+    std::function<Mat3(const Vec3&)> hessian;
 
     size_t num_tets() const { return tets.size(); }
     Aabb bounds() const;
@@ -63,6 +69,9 @@ struct TetRegion {
     // ball around the boundary's bounding box. A region whose field only matters in part of it
     // (an inclusion's mesh is used inside its ellipsoid) gives the bound over that part.
     double lattice_hessian = 0;
+    // The field's Hessian D^2 n^2 where paths use the mesh (at the handover to the exact glass),
+    // for the lattice's end correction (LatticePhase.h); empty: paths are handed over uncorrected.
+    std::function<Mat3(const Vec3&)> hessian;
 };
 
 // The lattice an interior is filled with: body-centred cubic, of cube edge `a`, turned by a fixed
@@ -71,7 +80,7 @@ struct TetRegion {
 // an unstructured mesh the errors of the ~L/h tetrahedra a path crosses add like a random walk,
 // O(h^1.5) in the end. On a lattice the gradient error is the same periodic function in every
 // cell, and along a path that crosses the cells at a generic angle it averages out, leaving
-// O(h^2) = O(tolerance). Two things decide the constant (docs/grin.md):
+// O(h^2) = O(tolerance). Three things decide the constant (docs/grin.md):
 //  * the error's mean over a cell is not zero (a^2 tr(D^2 n^2) / 24 for BCC, a smooth bias
 //    field); an inclusion's region takes it out of its vertex values (defects/SolidBuilder.cpp);
 //  * a path nearly parallel to a low-order lattice plane does not average the periodic part: the
@@ -80,16 +89,19 @@ struct TetRegion {
 //    minimises the resonance score of scripts/lattice-direction (9.14, at most 11.1 within 5
 //    degrees of z; the rotation used before, (37.3, 23.7, 11.1), scored 11.4 and 14.9). The
 //    rotation about z is immaterial for rays along z.
+//  * a path enters and leaves the lattice at a phase of its own: the end terms, which the tracer
+//    corrects in closed form (LatticePhase.h), given the lattice's frame and the field's Hessian.
 // Measured for the 2.5 mm, delta_n = 0.02 inclusion of scenes/examples/inclusion-smooth.yaml at
 // the tolerance 1e-4 (display 60 mm behind; rays on a 0.2 mm grid; bench/bench_grin.cpp e):
 // unstructured, 1.9 million tetrahedra, display errors 0.018 mm at most, 0.0037 mm on average;
 // the lattice without the bias correction, at the former rotation, 2.0 million, 0.0054 and
 // 0.0013 mm; with the correction (and the continued profile of defects/SolidBuilder.cpp) at this
-// rotation, 2.5 million, 0.0016 and 0.00034 mm. BCC's Delaunay tetrahedra are
-// congruent, with circumradius a sqrt(5) / 4, which is their smallest enclosing radius (the
-// circumcentre lies inside), so a = 4 sqrt(2 t / M) / sqrt(5) meets the tolerance t where
-// ||D^2 n^2|| <= M; lattice_spacing returns 0.9 of that, so that rounding never tips a lattice
-// tetrahedron over the bound (a split would break the regularity locally).
+// rotation, 2.5 million, 0.0016 and 0.00034 mm; with the end correction as well, 4.8e-5 and
+// 1.1e-5 mm. BCC's Delaunay tetrahedra are congruent, with circumradius a sqrt(5) / 4, which is
+// their smallest enclosing radius (the circumcentre lies inside), so a = 4 sqrt(2 t / M) / sqrt(5)
+// meets the tolerance t where ||D^2 n^2|| <= M; lattice_spacing returns 0.9 of that, so that
+// rounding never tips a lattice tetrahedron over the bound (a split would break the regularity
+// locally).
 inline constexpr double kLatticeAngles[3] = {26.41, -6.58, 0.0};  // degrees, rotation_from_euler_deg
 double lattice_spacing(double tolerance, double hessian_bound);
 

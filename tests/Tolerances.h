@@ -764,3 +764,19 @@ namespace ltm::tol {
 constexpr double kRssNoiseBytes = 16.0 * 1024 * 1024;
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// geometry_lattice_phase: S's closed form (six B2 terms, |B2| <= 1/6, entries of m m^T <= 1)
+// against its barycentric definition (four products l (v - xi)_i (v - xi)_j <= 1, the coordinates
+// from 3x3 determinants of O(1) entries): ~20 roundings of O(1) terms on each side, and the
+// fractional parts of m . xi for |xi| <= 3 lose 3 bits: 1e-13 is ~450 eps, with margin.
+constexpr double kLatticeMomentAbs = 1e-13;
+// Psi against the transport equation by central differences (exact for Psi and e, piecewise
+// quadratic, away from the faces): what is left is rounding over the step, eps |m . xi| / (step / a)
+// relative, |m . xi| <= 60 and step = 1e-3 a: 1.3e-11 relative to a ||H||; p . Psi = e / 2 to
+// eps |m . xi| / |m . p|-ish relative, 1e-12. Both with margin: 1e-9 and 1e-11.
+constexpr double kLatticeTransportRelative = 1e-9;
+constexpr double kLatticeInvariantRelative = 1e-11;
+
+}  // namespace ltm::tol
