@@ -69,6 +69,25 @@ double InclusionField::extended_laplacian_n2(const Vec3& x, double s_ext) const 
     return 2.0 * dn_ * (n0_ + dn_ * q) * lap_q + 2.0 * dn_ * dn_ * grad_q2;
 }
 
+Mat3 InclusionField::extended_hessian_n2(const Vec3& x, double s_ext) const {
+    const double r2 = s(x);
+    if (!smooth_ || !(r2 < s_ext)) return Mat3::zero();
+    const Vec3 y = ft_ * (x - c_);
+    const Mat3 f = ft_.transposed();
+    const Vec3 gs = f * Vec3{2.0 * y.x * inv_e2_.x, 2.0 * y.y * inv_e2_.y, 2.0 * y.z * inv_e2_.z};
+    const double u = 1.0 - r2, q = u * u;
+    const Vec3 gq = gs * (-2.0 * u);
+    Mat3 h = Mat3::zero();
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double d2s = 0;  // (2 F S F^T)_ij
+            for (int k = 0; k < 3; ++k) d2s += 2.0 * f(i, k) * inv_e2_[k] * f(j, k);
+            const double d2q = 2.0 * gs[i] * gs[j] - 2.0 * u * d2s;
+            h(i, j) = 2.0 * dn_ * (n0_ + dn_ * q) * d2q + 2.0 * dn_ * dn_ * gq[i] * gq[j];
+        }
+    return h;
+}
+
 double InclusionField::extended_hessian_bound(const Vec3& centre, double radius, double s_ext) const {
     if (!smooth_) return 0.0;
     if (!(s_ext > 1.0)) return hessian_bound(centre, radius);

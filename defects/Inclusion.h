@@ -43,6 +43,9 @@ public:
     //   lap n^2 = 2 dn (n0 + dn q) lap q + 2 dn^2 |grad q|^2,
     //   lap q = 2 |grad s|^2 - 2 (1 - s) lap s,  |grad s|^2 = 4 |S y|^2,  lap s = 2 tr S.
     double extended_laplacian_n2(const Vec3& x, double s_ext) const;
+    // Hessian of extended_n2 (for s < s_ext; 0 beyond), as above:
+    //   D^2 n^2 = 2 dn (n0 + dn q) D^2 q + 2 dn^2 grad q grad q^T, grad s = 2 F S y, D^2 s = 2 F S F^T.
+    Mat3 extended_hessian_n2(const Vec3& x, double s_ext) const;
     // The bound of the tetrahedral criterion (geometry/TetMesh.h: M r^2 / 2 <= tolerance) for a
     // mesh of extended_n2 (s_ext > 1) over the ball (centre, radius): 0 when the ball lies outside
     // the ellipsoid (no path uses the mesh there); with s_ext <= 1, hessian_bound. Otherwise the

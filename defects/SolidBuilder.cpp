@@ -138,6 +138,8 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
             const double m = f->extended_hessian_bound(c, radius, s_ext);
             return m > 0 && radius > 0 ? m * (1.0 + alpha / (radius * radius)) : m;
         };
+        // The Hessian where paths use the mesh, for the lattice's end correction (LatticePhase.h).
+        r.hessian = [f, s_ext](const Vec3& x) { return f->extended_hessian_n2(x, s_ext); };
         // rho is 1/e_min-Lipschitz: (kLatticeScale - rho) e_min is a lower bound of the depth below
         // the ellipsoid rho = kLatticeScale.
         r.depth = [f](const Vec3& x) { return (kLatticeScale - std::sqrt(f->s(x))) * f->min_semi_axis(); };
@@ -155,6 +157,13 @@ TetRegion index_region(const Lens& lens, const Defect* defect, const IndexField&
     r.boundary = circumscribed(t.mesh, 2.0 * t.chord_error + 1.5 * a);
     r.n2 = [field](const Vec3& x) { return field.n2(x); };
     r.hessian_bound = [m](const Vec3&, double) { return m; };
+    const Vec3 k = field.gradient;
+    r.hessian = [k](const Vec3&) {  // 2 k k^T, for the lattice's end correction (LatticePhase.h)
+        Mat3 h;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) h(i, j) = 2.0 * k[i] * k[j];
+        return h;
+    };
     r.depth = [lens, a](const Vec3& x) { return lens.signed_distance(x) + 1.5 * a; };
     return r;
 }

@@ -780,3 +780,12 @@ constexpr double kLatticeTransportRelative = 1e-9;
 constexpr double kLatticeInvariantRelative = 1e-11;
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// validation_tetwalk: a product target, not a rounding bound: display hits of a smooth inclusion
+// meshed at the default index tolerance within 1e-3 mm of the converged reference (docs/grin.md,
+// "Accuracy"; a tenth of a typical display pixel of 0.1..0.3 mm, so that T's columns do not move).
+constexpr double kInclusionDisplayTarget = 1e-3;  // mm
+
+}  // namespace ltm::tol

@@ -54,7 +54,20 @@ bool may_meet(const Surface& s, const Vec3& c, double r) {
 
 TetWalk::~TetWalk() = default;
 
-TetWalk::TetWalk(const TetMesh& mesh, std::vector<Patch> surfaces) : surfaces_(std::move(surfaces)) {
+Vec3 TetWalk::entering(const Vec3& r, const Vec3& p) const {
+    if (!hessian_) return p;
+    const Vec3 q = p + phase_(r, p, hessian_(r));
+    return is_finite(q) ? q * (length(p) / length(q)) : p;
+}
+
+Vec3 TetWalk::leaving(const Vec3& r, const Vec3& p) const {
+    if (!hessian_) return p;
+    const Vec3 q = p - phase_(r, p, hessian_(r));
+    return is_finite(q) ? q : p;
+}
+
+TetWalk::TetWalk(const TetMesh& mesh, std::vector<Patch> surfaces)
+    : surfaces_(std::move(surfaces)), phase_(mesh.lattice), hessian_(mesh.hessian) {
     for (const Patch& s : surfaces_) quadrics_.push_back(Quadric::from(s.surface));
     const size_t nt = mesh.tets.size();
     // Order the tetrahedra along a Morton curve of their centroids (21 bits per axis), so that a

@@ -20,6 +20,10 @@
 // hands over to the glass; the object's faces where the region reaches them; enclosed defects)
 // are listed per tetrahedron (those whose surface passes within the tetrahedron's enclosing
 // ball) and solved on the parabola as quartics (trace/Polynomial.h), before the exit face.
+//
+// Where the mesh is a lattice, the path's momentum is handed over with the lattice's end
+// correction (entering, leaving; geometry/LatticePhase.h): the mesh's periodic interpolation error
+// drives an oscillating part of the momentum, which a path coming from outside lacks.
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -57,6 +61,13 @@ public:
     // tetrahedron: |p| = sqrt of a quadratic in tau, smooth over one tetrahedron).
     Exit walk(const Vec3& r, const Vec3& p, int tet, bool arc) const;
 
+    // The lattice's end correction (geometry/LatticePhase.h): the momentum a path arriving at r
+    // with the true momentum p carries into the mesh (p + Psi, rescaled to |p|), and the true
+    // momentum of a path that leaves the mesh at r with p (p - Psi). The identity where the mesh
+    // has no lattice or no Hessian.
+    Vec3 entering(const Vec3& r, const Vec3& p) const;
+    Vec3 leaving(const Vec3& r, const Vec3& p) const;
+
 private:
     // A face plane, oriented so that it is positive inside the tetrahedron that stores it: n . x - o.
     // The two tetrahedra sharing a face store bit-identical copies of opposite sign (negation is
@@ -80,6 +91,8 @@ private:
     std::vector<std::uint32_t> tet_surfaces_;  // per tetrahedron, indices into surfaces_
     std::vector<Patch> surfaces_;
     std::vector<Quadric> quadrics_;
+    LatticePhase phase_;
+    std::function<Mat3(const Vec3&)> hessian_;
     // Point location: a uniform grid of cells listing the tetrahedra whose boxes meet them.
     Aabb grid_box_;
     int nx_ = 1, ny_ = 1, nz_ = 1;

@@ -720,7 +720,7 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
         return h;
     }
     const double n0 = std::sqrt(std::max(w.n2(tet, st.o), 0.0));
-    const TetWalk::Exit ex = w.walk(st.o, st.d * n0, tet, scene_.object.absorption > 0);
+    const TetWalk::Exit ex = w.walk(st.o, w.entering(st.o, st.d * n0), tet, scene_.object.absorption > 0);
     stats.tet_crossings += static_cast<std::uint64_t>(ex.crossings);
     if (ex.kind == TetWalk::Exit::Kind::Stuck) {
         h.lost = true;
@@ -745,7 +745,7 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
     if (std::fabs(length2(ex.p) - n2) > trace_tol::kHamiltonianRelative * std::max(n2, 1.0)) ++stats.hamiltonian_violations;
     h.t = ex.tau;
     h.p = ex.r;
-    h.d_in = normalize(ex.p);
+    h.d_in = normalize(w.leaving(ex.r, ex.p));
     h.n_from = std::sqrt(std::max(n2, 0.0));
     h.length = ex.arc;
     on_surface(h);
