@@ -19,20 +19,29 @@ double spectral_norm(const Mat3& A) {
     return Eigen::JacobiSVD<Eigen::Matrix3d>(m).singularValues()(0);
 }
 
-// C, S, U of one eigen-direction (see GrinPath.h).
+// C, S, U of one eigen-direction (see GrinPath.h), from the half angle alone: with
+// s = sin(w tau / 2) and c = cos(w tau / 2) (one sincos),
+//   S = 2 s c / w,  U = 2 s^2 / w^2,  C = 1 - w^2 U = 1 - 2 s^2,
+// each within a few ulps (no cancellation: C's absolute error is that of s^2, as a correctly
+// rounded cos would have near 1, and an ulp of 1 where C is near 0, below y0's own rounding).
+// Likewise with s = sinh(k tau / 2) and c = sqrt(1 + s^2) = cosh(k tau / 2):
+//   S = 2 s c / k,  U = 2 s^2 / k^2,  C = 1 + 2 s^2.
+// One transcendental call instead of three: these are most of a general-form step's cost.
 struct Csu {
     double C, S, U;
 };
 Csu csu(double lambda, double tau) {
     if (lambda == 0) return {1.0, tau, 0.5 * tau * tau};
     if (lambda < 0) {
-        const double w = std::sqrt(-lambda);
-        const double h = std::sin(0.5 * w * tau);
-        return {std::cos(w * tau), std::sin(w * tau) / w, 2.0 * h * h / (w * w)};
+        const double w = std::sqrt(-lambda), half = 0.5 * w * tau;
+        const double s = std::sin(half), c = std::cos(half);
+        const double u = 2.0 * s * s;
+        return {1.0 - u, 2.0 * s * c / w, u / (w * w)};
     }
     const double k = std::sqrt(lambda);
-    const double h = std::sinh(0.5 * k * tau);
-    return {std::cosh(k * tau), std::sinh(k * tau) / k, 2.0 * h * h / (k * k)};
+    const double s = std::sinh(0.5 * k * tau), c = std::sqrt(1.0 + s * s);
+    const double u = 2.0 * s * s;
+    return {1.0 + u, 2.0 * s * c / k, u / (k * k)};
 }
 
 }  // namespace
