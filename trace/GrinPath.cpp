@@ -85,6 +85,11 @@ void GrinPath::state(double tau, Vec3& r, Vec3& p) const {
         p = p0_ + beta * tau;
         return;
     }
+    if (tau == 0) {  // the start, exactly (every surface's search begins there)
+        r = r0_;
+        p = p0_;
+        return;
+    }
     Vec3 y, v;
     for (int i = 0; i < 3; ++i) {
         const double l = f_->lambda()[i], b = f_->beta()[i];
