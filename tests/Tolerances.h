@@ -789,3 +789,17 @@ namespace ltm::tol {
 constexpr double kInclusionDisplayTarget = 1e-3;  // mm
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// defects_inclusion: the Hessian of n^2 = (n0 + dn (1 - s)^2)^2 (degree 8 in x) against central
+// second differences with the step h = 1e-4 e_min: the truncation is h^2 / 12 of the fourth
+// derivatives, whose size is ~ 10^2 ||D^2 n^2|| / e_min^2 here, 1e-7 of the bound; the rounding
+// is 4 eps n^2 / (4 h^2) = 1.2e-8 / e_min^2 mm^-2, 2e-7 of the bound (~0.1 mm^-2) for
+// e_min = 0.8. 1e-5 of the bound, with margin. Identities (the Laplacian as the trace, the
+// bound at a point) hold to rounding of O(10) terms: 1e-12.
+constexpr double kFieldDifferenceStep = 1e-4;
+constexpr double kFieldDifferenceRelative = 1e-5;
+constexpr double kFieldIdentityRelative = 1e-12;
+
+}  // namespace ltm::tol
