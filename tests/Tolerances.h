@@ -94,7 +94,7 @@ namespace ltm::tol {
 // ---- trace_split: the split estimator's deterministic branches against closed forms ----
 
 // A defect-free window at exact normal incidence: every deterministic branch weight is a product
-// of at most `depth` Fresnel factors (R or T = 1 - R) computed by trace/Optics.cpp, and the closed
+// of at most `depth` Fresnel factors (R or T = 1 - R) computed by trace/Optics.h, and the closed
 // form multiplies the same number of factors from R = ((n - 1) / (n + 1))^2. Each factor differs
 // between the two by at most ~8 u relative (the tracer: eta = n1 / n2 (1 rounding), eta cos_i -
 // cos_t and eta cos_i + cos_t (exact or 1 rounding each at cos_i = cos_t = 1), the quotient, the

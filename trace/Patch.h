@@ -88,7 +88,11 @@ inline bool may_hit(const Patch& p, const Vec3& o, const Vec3& d, const Vec3& in
 // Does the segment o + t d, t in [0, tmax], come within the patch's bounding sphere?
 inline bool segment_near(const Patch& p, const Vec3& o, const Vec3& d, double tmax) {
     const Vec3 v = p.centre - o;
-    const double tc = std::fmin(std::fmax(dot(v, d), 0.0), tmax);
+    // min(max(v.d, 0), tmax) as std::fmin / std::fmax would give it (a NaN argument yields the
+    // other one), written out: those are library calls here, two per defect per segment.
+    const double vd = dot(v, d);
+    const double lo = vd > 0.0 ? vd : 0.0;
+    const double tc = tmax < lo ? tmax : lo;
     const Vec3 w = v - d * tc;
     return dot(w, w) <= p.bounding_radius * p.bounding_radius;
 }

@@ -153,8 +153,22 @@ private:
 
 std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::int32_t>& columns,
                        std::vector<float>& values) {
-    // Merge equal columns, summing in sample order (the stable sort keeps it).
-    std::stable_sort(entries.begin(), entries.end(), [](const RowEntry& a, const RowEntry& b) { return a.column < b.column; });
+    // Merge equal columns, summing in sample order (the stable sort keeps it). A row holds a
+    // pixel's samples, mostly on few columns: a stable insertion sort (each entry moves past the
+    // larger columns only) needs no buffer, where std::stable_sort allocates one per row (perf:
+    // 2.7 % of an analytic render). Long rows keep the O(n log n) sort.
+    constexpr size_t kInsertionLimit = 256;
+    const auto by_column = [](const RowEntry& a, const RowEntry& b) { return a.column < b.column; };
+    if (entries.size() <= kInsertionLimit) {
+        for (size_t i = 1; i < entries.size(); ++i) {
+            const RowEntry e = entries[i];
+            size_t j = i;
+            for (; j > 0 && by_column(e, entries[j - 1]); --j) entries[j] = entries[j - 1];
+            entries[j] = e;
+        }
+    } else {
+        std::stable_sort(entries.begin(), entries.end(), by_column);
+    }
     std::int32_t n = 0;
     for (size_t i = 0; i < entries.size();) {
         double w = 0;
