@@ -693,3 +693,34 @@ display: {resolution: [40, 40], size: [200.0, 200.0], z: 30.0}
         EXPECT_LE(std::fabs(d1.x), td) << y0;  // in the plane of the ray and the normal
     }
 }
+
+// merge_row's contract: one entry per distinct column, ascending, each the weights of that column
+// added in the order they come, over spp, rounded once to float. With B = 2^53 the order is
+// visible even after the float: B, -B, 1 sums to 1, but B, 1, -B to 0 (B + 1 rounds to B, ties
+// to even). Checked for a row of few distinct columns (merge_row's table) and rows of more than it
+// holds (its sorted merge), against the sums written out here.
+TEST(Render, MergeRowSumsEachColumnInSampleOrder) {
+    const double B = std::ldexp(1.0, 53);
+    for (int distinct : {3, 31, 32, 33, 80}) {
+        std::vector<RowEntry> entries;
+        // Column c (in a scrambled order): B, -B, 1 when c is even, B, 1, -B when it is odd.
+        for (int pass = 0; pass < 3; ++pass)
+            for (int i = 0; i < distinct; ++i) {
+                const std::int32_t c = (i * 37) % distinct * 5 + 7;
+                const double even[3] = {B, -B, 1.0}, odd[3] = {B, 1.0, -B};
+                entries.push_back({c, c % 2 == 0 ? even[pass] : odd[pass]});
+            }
+        std::vector<std::int32_t> columns;
+        std::vector<float> values;
+        const int spp = 4;
+        ASSERT_EQ(merge_row(entries, spp, columns, values), distinct) << distinct;
+        ASSERT_EQ(static_cast<int>(columns.size()), distinct);
+        for (int i = 0; i < distinct; ++i) {
+            const std::int32_t c = columns[static_cast<size_t>(i)];
+            EXPECT_EQ(c, 7 + 5 * i) << distinct;
+            const double sum = c % 2 == 0 ? ((0.0 + B) - B) + 1.0 : ((0.0 + B) + 1.0) - B;
+            EXPECT_EQ(values[static_cast<size_t>(i)], static_cast<float>(sum / spp)) << distinct << " column " << c;
+            EXPECT_EQ(values[static_cast<size_t>(i)], c % 2 == 0 ? 0.25f : 0.0f);
+        }
+    }
+}

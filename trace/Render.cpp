@@ -153,22 +153,45 @@ private:
 
 std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::int32_t>& columns,
                        std::vector<float>& values) {
-    // Merge equal columns, summing in sample order (the stable sort keeps it). A row holds a
-    // pixel's samples, mostly on few columns: a stable insertion sort (each entry moves past the
-    // larger columns only) needs no buffer, where std::stable_sort allocates one per row (perf:
-    // 2.7 % of an analytic render). Long rows keep the O(n log n) sort.
-    constexpr size_t kInsertionLimit = 256;
-    const auto by_column = [](const RowEntry& a, const RowEntry& b) { return a.column < b.column; };
-    if (entries.size() <= kInsertionLimit) {
-        for (size_t i = 1; i < entries.size(); ++i) {
-            const RowEntry e = entries[i];
-            size_t j = i;
-            for (; j > 0 && by_column(e, entries[j - 1]); --j) entries[j] = entries[j - 1];
-            entries[j] = e;
+    // Each distinct column's weights summed in sample order, then the columns in ascending order.
+    // Most rows are a pixel's samples on a few columns: accumulated in a small table, a linear
+    // search each (no buffer; std::stable_sort allocates one per row, and a stable insertion sort
+    // moves most entries past most others: perf, 2.7 % and 7.8 % of an analytic render). The sums
+    // are the same additions in the same order as the sorted merge below, which rows with more
+    // distinct columns than the table holds take.
+    constexpr int kFew = 32;
+    std::int32_t few_col[kFew];
+    double few_sum[kFew];
+    int u = 0;
+    bool few = true;
+    for (const RowEntry& e : entries) {
+        int i = 0;
+        while (i < u && few_col[i] != e.column) ++i;
+        if (i == u) {
+            if (u == kFew) {
+                few = false;
+                break;
+            }
+            few_col[u] = e.column;
+            few_sum[u++] = 0.0;
         }
-    } else {
-        std::stable_sort(entries.begin(), entries.end(), by_column);
+        few_sum[i] += e.weight;
     }
+    if (few) {
+        // Distinct keys: any sort gives the same order.
+        for (int i = 1; i < u; ++i)
+            for (int j = i; j > 0 && few_col[j] < few_col[j - 1]; --j) {
+                std::swap(few_col[j], few_col[j - 1]);
+                std::swap(few_sum[j], few_sum[j - 1]);
+            }
+        for (int i = 0; i < u; ++i) {
+            columns.push_back(few_col[i]);
+            values.push_back(static_cast<float>(few_sum[i] / spp));
+        }
+        return u;
+    }
+    // Merge equal columns, summing in sample order (the stable sort keeps it).
+    std::stable_sort(entries.begin(), entries.end(), [](const RowEntry& a, const RowEntry& b) { return a.column < b.column; });
     std::int32_t n = 0;
     for (size_t i = 0; i < entries.size();) {
         double w = 0;
