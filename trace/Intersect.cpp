@@ -14,45 +14,7 @@ void Roots::sort() {
         for (int j = i; j > 0 && t[j - 1] > t[j]; --j) std::swap(t[j - 1], t[j]);
 }
 
-Roots solve_quadratic(double a, double b, double c, double disc) {
-    Roots r;
-    if (!(disc >= 0) || a == 0) {
-        if (a == 0 && b != 0) r.push(-c / b);
-        return r;
-    }
-    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
-    const double t0 = q / a;
-    const double t1 = q != 0 ? c / q : t0;
-    r.push(std::min(t0, t1));
-    r.push(std::max(t0, t1));
-    return r;
-}
-
 namespace {
-
-// Sphere |o + t d - c|^2 = r^2 with |d| = 1: t^2 + 2 (oc.d) t + |oc|^2 - r^2 = 0. Its discriminant
-// 4 (r^2 - |oc - (oc.d) d|^2) uses the distance from the centre to the line, which stays accurate
-// when the ray passes near the centre and does not subtract two large squares.
-Roots sphere(const Vec3& c, double r, const Vec3& o, const Vec3& d) {
-    const Vec3 oc = o - c;
-    const double b = dot(oc, d);
-    const Vec3 perp = oc - d * b;
-    const double lp = length(perp), lo = length(oc);
-    return solve_quadratic(1.0, 2.0 * b, (lo - r) * (lo + r), 4.0 * (r - lp) * (r + lp));
-}
-
-Roots cylinder(const Vec3& c, const Vec3& u, double r, const Vec3& o, const Vec3& d) {
-    // Project onto the plane normal to the axis: |oc_p + t d_p|^2 = r^2.
-    const Vec3 oc = o - c;
-    const Vec3 ocp = oc - u * dot(oc, u), dp = d - u * dot(d, u);
-    const double a = dot(dp, dp);
-    if (a == 0) return {};
-    const double b = dot(ocp, dp);
-    // Distance from the axis to the (projected) line: |ocp - (ocp.dp / a) dp|.
-    const Vec3 perp = ocp - dp * (b / a);
-    const double lp = length(perp), lo = length(ocp);
-    return solve_quadratic(a, 2.0 * b, (lo - r) * (lo + r), 4.0 * a * (r - lp) * (r + lp));
-}
 
 Roots ellipsoid(const Surface& s, const Vec3& o, const Vec3& d) {
     // In the body frame scaled to the unit sphere: o' = S^-1 R^T (o - c), d' = S^-1 R^T d.
@@ -96,7 +58,7 @@ Roots cone(const Surface& s, const Vec3& o, const Vec3& d) {
 // (the 1e-3 mm chord of a 0.125 mm groove bottom grazed 1e-6 mm deep is found by a wide margin).
 Roots torus(const Surface& s, const Vec3& o, const Vec3& d) {
     Roots r;
-    const Roots bs = sphere(s.origin, s.radius + s.minor_radius, o, d);
+    const Roots bs = intersect_sphere(s.origin, s.radius + s.minor_radius, o, d);
     if (bs.count < 2) return r;
     const double dd = dot(d, d);
     const double tm = dot(s.origin - o, d) / dd;
@@ -124,8 +86,8 @@ Roots intersect(const Surface& s, const Vec3& o, const Vec3& d) {
             if (dn != 0) r.push(dot(s.origin - o, s.axis) / dn);
             return r;
         }
-        case SurfaceKind::Sphere: return sphere(s.origin, s.radius, o, d);  // solve_quadratic orders them
-        case SurfaceKind::Cylinder: return cylinder(s.origin, s.axis, s.radius, o, d);
+        case SurfaceKind::Sphere: return intersect_sphere(s.origin, s.radius, o, d);  // solve_quadratic orders them
+        case SurfaceKind::Cylinder: return intersect_cylinder(s.origin, s.axis, s.radius, o, d);
         case SurfaceKind::Ellipsoid: return ellipsoid(s, o, d);
         case SurfaceKind::Cone: r = cone(s, o, d); break;
         case SurfaceKind::Torus: r = torus(s, o, d); break;

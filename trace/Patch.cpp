@@ -53,26 +53,4 @@ void Patch::finalize() {
     }
 }
 
-bool on_patch(const Patch& p, const Vec3& x) {
-    if (p.kind == Patch::Kind::Closed) return true;
-    if (p.kind == Patch::Kind::Rim) return x.z >= p.z_min && x.z <= p.z_max;
-    if (x.x * x.x + x.y * x.y > p.rho2_max) return false;
-    if (p.surface.kind == SurfaceKind::Sphere) {
-        // The branch through the vertex: on the vertex's side of the centre's z.
-        const double zc = p.surface.origin.z;
-        if ((x.z - zc) * (p.z_vertex - zc) <= 0) return false;
-    }
-    return true;
-}
-
-double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax) {
-    const Roots r = intersect(p.surface, o, d);
-    for (int i = 0; i < r.count; ++i) {
-        const double t = r.t[i];
-        if (!(t > tmin && t < tmax)) continue;
-        if (on_patch(p, o + d * t)) return t;
-    }
-    return INFINITY;
-}
-
 }  // namespace ltm

@@ -10,6 +10,7 @@
 #include "geometry/Lens.h"
 #include "geometry/Surface.h"
 #include "geometry/TriMesh.h"
+#include "trace/Intersect.h"
 
 namespace ltm {
 
@@ -102,11 +103,34 @@ std::vector<Patch> object_patches(const Lens& lens);
 
 // Whether a point of the patch's full surface lies on the patch (the caps' aperture and branch,
 // the rim's height; always for a closed patch), with the slack of finalize().
-bool on_patch(const Patch& p, const Vec3& x);
+inline bool on_patch(const Patch& p, const Vec3& x) {
+    if (p.kind == Patch::Kind::Closed) return true;
+    if (p.kind == Patch::Kind::Rim) return x.z >= p.z_min && x.z <= p.z_max;
+    if (x.x * x.x + x.y * x.y > p.rho2_max) return false;
+    if (p.surface.kind == SurfaceKind::Sphere) {
+        // The branch through the vertex: on the vertex's side of the centre's z.
+        const double zc = p.surface.origin.z;
+        if ((x.z - zc) * (p.z_vertex - zc) <= 0) return false;
+    }
+    return true;
+}
 
 // The smallest root t in (tmin, tmax) of the ray o + t d (d unit) on the patch, or +inf.
 // Boundary tests (rho <= a, z in [z_lo, z_hi]) allow a few ulps so that a ray through a seam is
-// caught by at least one of the two patches meeting there.
-double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax);
+// caught by at least one of the two patches meeting there. Inline, with the object's spheres and
+// cylinder solved inline (intersect's own cases, the same arithmetic): it runs several times on
+// every segment.
+inline double patch_hit(const Patch& p, const Vec3& o, const Vec3& d, double tmin, double tmax) {
+    const Surface& s = p.surface;
+    const Roots r = s.kind == SurfaceKind::Sphere     ? intersect_sphere(s.origin, s.radius, o, d)
+                    : s.kind == SurfaceKind::Cylinder ? intersect_cylinder(s.origin, s.axis, s.radius, o, d)
+                                                      : intersect(s, o, d);
+    for (int i = 0; i < r.count; ++i) {
+        const double t = r.t[i];
+        if (!(t > tmin && t < tmax)) continue;
+        if (on_patch(p, o + d * t)) return t;
+    }
+    return INFINITY;
+}
 
 }  // namespace ltm
