@@ -97,11 +97,7 @@ Roots intersect(const Surface& s, const Vec3& o, const Vec3& d) {
 }
 
 double point_error_bound(const Surface& s, const Vec3& p) {
-    constexpr double u = std::numeric_limits<double>::epsilon() * 0.5;
-    const double mag = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
-                       std::max({std::fabs(s.origin.x), std::fabs(s.origin.y), std::fabs(s.origin.z)}) + s.radius +
-                       s.minor_radius + std::max({s.semi_axes.x, s.semi_axes.y, s.semi_axes.z});
-    return std::fabs(s.signed_distance(p)) + trace_tol::kPointErrorUlps * u * mag;
+    return std::fabs(s.signed_distance(p)) + point_rounding_bound(s, p);
 }
 
 }  // namespace ltm

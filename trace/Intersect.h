@@ -8,7 +8,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include <limits>
+
 #include "geometry/Surface.h"
+#include "trace/TraceTolerance.h"
 
 namespace ltm {
 
@@ -72,5 +75,14 @@ Roots intersect(const Surface& s, const Vec3& o, const Vec3& d);
 // its residual distance plus the rounding of evaluating that distance (a few ulps of the
 // magnitudes involved). Used to offset spawned rays (pbrt-v4's OffsetRayOrigin idea).
 double point_error_bound(const Surface& s, const Vec3& p);
+// Its second part: the rounding of evaluating the distance, kPointErrorUlps ulps of the
+// magnitudes involved (point_error_bound = |signed distance| + this).
+inline double point_rounding_bound(const Surface& s, const Vec3& p) {
+    constexpr double u = std::numeric_limits<double>::epsilon() * 0.5;
+    const double mag = std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) +
+                       std::max({std::fabs(s.origin.x), std::fabs(s.origin.y), std::fabs(s.origin.z)}) + s.radius +
+                       s.minor_radius + std::max({s.semi_axes.x, s.semi_axes.y, s.semi_axes.z});
+    return trace_tol::kPointErrorUlps * u * mag;
+}
 
 }  // namespace ltm

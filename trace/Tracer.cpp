@@ -392,8 +392,17 @@ bool Tracer::in_glass(const Vec3& p) const {
 
 void Tracer::on_surface(Hit& h) const {
     const SurfaceInfo& s = solid_.surfaces[h.tag];
-    h.n_out = s.surface.normal(h.p) * static_cast<double>(s.normal_sign);
-    h.offset = trace_tol::kSpawnOffsetBounds * point_error_bound(s.surface, h.p);
+    if (s.surface.kind == SurfaceKind::Sphere) {
+        // Surface::normal and point_error_bound of a sphere, sharing their one distance |p - c|
+        // (the same arithmetic as theirs: the caps of most lenses are spheres).
+        const Vec3 v = h.p - s.surface.origin;
+        const double r = length(v);
+        h.n_out = (v / r) * static_cast<double>(s.normal_sign);
+        h.offset = trace_tol::kSpawnOffsetBounds * (std::fabs(r - s.surface.radius) + point_rounding_bound(s.surface, h.p));
+    } else {
+        h.n_out = s.surface.normal(h.p) * static_cast<double>(s.normal_sign);
+        h.offset = trace_tol::kSpawnOffsetBounds * point_error_bound(s.surface, h.p);
+    }
     h.found = true;
 }
 
