@@ -154,39 +154,37 @@ private:
 std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::int32_t>& columns,
                        std::vector<float>& values) {
     // Each distinct column's weights summed in sample order, then the columns in ascending order.
-    // Most rows are a pixel's samples on a few columns: accumulated in a small table, a linear
-    // search each (no buffer; std::stable_sort allocates one per row, and a stable insertion sort
-    // moves most entries past most others: perf, 2.7 % and 7.8 % of an analytic render). The sums
-    // are the same additions in the same order as the sorted merge below, which rows with more
-    // distinct columns than the table holds take.
-    constexpr int kFew = 32;
-    std::int32_t few_col[kFew];
-    double few_sum[kFew];
-    int u = 0;
-    bool few = true;
-    for (const RowEntry& e : entries) {
-        int i = 0;
-        while (i < u && few_col[i] != e.column) ++i;
-        if (i == u) {
-            if (u == kFew) {
-                few = false;
-                break;
+    // Rows of up to kHashed entries (a pixel's samples, unless its spp is large) accumulate in a
+    // small open-addressing table on the stack, one probe sequence per entry, and sort only their
+    // distinct columns: no buffer, where std::stable_sort allocates one per row (perf: 2.7 % of an
+    // analytic render). The sums are the same additions in the same order as the sorted merge
+    // below, which longer rows take.
+    constexpr size_t kHashed = 256;
+    if (entries.size() <= kHashed) {
+        size_t cap = 16;  // a power of two, at least twice the entries: short probe sequences
+        while (cap < 2 * entries.size()) cap <<= 1;
+        std::int32_t slot[2 * kHashed];
+        std::fill(slot, slot + cap, -1);
+        std::int32_t col[kHashed], order[kHashed];
+        double sum[kHashed];
+        std::int32_t u = 0;
+        for (const RowEntry& e : entries) {
+            size_t h = (static_cast<std::uint32_t>(e.column) * 2654435761u) & (cap - 1);  // Knuth's multiplicative hash
+            while (slot[h] >= 0 && col[slot[h]] != e.column) h = (h + 1) & (cap - 1);
+            if (slot[h] < 0) {
+                slot[h] = u;
+                col[u] = e.column;
+                sum[u] = 0.0;
+                order[u] = u;
+                ++u;
             }
-            few_col[u] = e.column;
-            few_sum[u++] = 0.0;
+            sum[slot[h]] += e.weight;
         }
-        few_sum[i] += e.weight;
-    }
-    if (few) {
         // Distinct keys: any sort gives the same order.
-        for (int i = 1; i < u; ++i)
-            for (int j = i; j > 0 && few_col[j] < few_col[j - 1]; --j) {
-                std::swap(few_col[j], few_col[j - 1]);
-                std::swap(few_sum[j], few_sum[j - 1]);
-            }
-        for (int i = 0; i < u; ++i) {
-            columns.push_back(few_col[i]);
-            values.push_back(static_cast<float>(few_sum[i] / spp));
+        std::sort(order, order + u, [&](std::int32_t a, std::int32_t b) { return col[a] < col[b]; });
+        for (std::int32_t i = 0; i < u; ++i) {
+            columns.push_back(col[order[i]]);
+            values.push_back(static_cast<float>(sum[order[i]] / spp));
         }
         return u;
     }
