@@ -1,6 +1,7 @@
 // Coherent packets (Tracer::sample_packet): a pixel's camera samples with their first segments
-// found in one rtcIntersect16 give exactly what sample_paths gives one sample at a time, bit for
-// bit, in every representation and with either estimator, for full and partial packets, and when
+// found in one rtcIntersect16, and (Tracer::lockstep) traced side by side with every later
+// segment's candidates from one packet too, give exactly what sample_paths gives one sample at a
+// time, bit for bit, in every representation and with either estimator, for full and partial packets, and when
 // an ellipsoid near the front face sends a ray back to the single query. Render's results are
 // fixed by the same property (trace_render's determinism tests compare renders across threads).
 #include <gtest/gtest.h>
@@ -85,13 +86,29 @@ PathStats expect_packets_match(const Tracer& t, int size) {
     EXPECT_EQ(packet_stats.paths, single_stats.paths);
     EXPECT_EQ(packet_stats.segments, single_stats.segments);
     EXPECT_EQ(packet_stats.on_display, single_stats.on_display);
+    EXPECT_EQ(packet_stats.off_display, single_stats.off_display);
+    EXPECT_EQ(packet_stats.reflections, single_stats.reflections);
+    EXPECT_EQ(packet_stats.transmissions, single_stats.transmissions);
+    EXPECT_EQ(packet_stats.absorbed_particle, single_stats.absorbed_particle);
+    EXPECT_EQ(packet_stats.truncated, single_stats.truncated);
     EXPECT_EQ(packet_stats.leaks_unresolved, single_stats.leaks_unresolved);
+    // The same candidates: a packet that did not skip the facet a ray just left would hand
+    // refined_hit a spurious candidate the single query never sees.
+    EXPECT_EQ(packet_stats.spurious_candidates, single_stats.spurious_candidates);
+    EXPECT_EQ(packet_stats.guard_hits, single_stats.guard_hits);
+    EXPECT_EQ(packet_stats.leak_retries, single_stats.leak_retries);
+    // The weight sums too, bit for bit: paths traced side by side (Tracer::sample_lockstep) are
+    // summed in sample order after the packet, as one path after another adds to them.
+    EXPECT_TRUE(same_bits(packet_stats.display_weight, single_stats.display_weight));
+    EXPECT_TRUE(same_bits(packet_stats.absorbed_weight, single_stats.absorbed_weight));
+    EXPECT_TRUE(same_bits(packet_stats.lost_weight, single_stats.lost_weight));
     return packet_stats;
 }
 
-Tracer make(const Built& b, Representation r) {
+Tracer make(const Built& b, Representation r, int max_depth = TracerOptions{}.max_depth) {
     TracerOptions o;
     o.representation = r;
+    o.max_depth = max_depth;
     return Tracer(b.scene, b.solid, o);
 }
 
@@ -103,14 +120,47 @@ TEST(Packets, RefinedAndMeshOnlyUsePacketsAndMatchSingleRaysBitForBit) {
         SCOPED_TRACE(to_string(r));
         const Tracer t = make(b, r);
         ASSERT_TRUE(t.packets());  // Debian's Embree honours ray masks: packets are on
+        ASSERT_TRUE(t.lockstep());  // the sample estimator, no absorption: whole paths side by side
         for (int size : {Tracer::kPacket, 5}) {
             const PathStats s = expect_packets_match(t, size);
             EXPECT_GT(s.packet_segments, 0u);
-            // Every first segment went one of the two ways (a partial packet of one goes alone).
-            if (size == Tracer::kPacket) {
-                EXPECT_EQ(s.packet_segments + s.packet_fallbacks, s.paths);
-            }
+            // Every first segment went one of the two ways, and so did later ones: packet
+            // candidates answered more segments than there are camera rays.
+            EXPECT_GT(s.packet_segments + s.packet_fallbacks, s.paths);
+            EXPECT_LE(s.packet_segments + s.packet_fallbacks, s.segments);
         }
+    }
+}
+
+// Paths cut by the depth cap (their weight counted as lost) and paths that end on the absorbing
+// particle (as absorbed) add to the weight sums at their ends: side by side, the sums are still
+// the one-at-a-time sums bit for bit.
+TEST(Packets, TruncatedAndAbsorbedPathsSumTheirWeightsAsOneAtATime) {
+    const Built b = build(kLens);
+    for (auto r : {Representation::Refined, Representation::MeshOnly}) {
+        SCOPED_TRACE(to_string(r));
+        const Tracer t = make(b, r, 2);
+        ASSERT_TRUE(t.lockstep());
+        const PathStats s = expect_packets_match(t, Tracer::kPacket);
+        EXPECT_GT(s.truncated, 0u);
+        EXPECT_GT(s.lost_weight, 0.0);
+        EXPECT_GT(s.absorbed_particle, 0u);
+    }
+}
+
+// Absorption in the glass adds to the absorbed weight on every segment: those paths take the
+// first segment from the packet only, and match all the same.
+TEST(Packets, AbsorbingGlassTracesOnlyTheFirstSegmentsInPackets) {
+    Built b = build(kLens);
+    b.scene.object.absorption = 0.05;
+    for (auto r : {Representation::Refined, Representation::MeshOnly}) {
+        SCOPED_TRACE(to_string(r));
+        const Tracer t = make(b, r);
+        EXPECT_TRUE(t.packets());
+        EXPECT_FALSE(t.lockstep());
+        const PathStats s = expect_packets_match(t, Tracer::kPacket);
+        EXPECT_EQ(s.packet_segments + s.packet_fallbacks, s.paths);
+        EXPECT_GT(s.absorbed_weight, 0.0);
     }
 }
 
@@ -127,7 +177,9 @@ TEST(Packets, SplitEstimatorAndBooleanGlassMatchToo) {
     Built lens = build(kLens);
     lens.scene.tracing.estimator = Estimator::Split;
     lens.scene.tracing.split_depth = 3;
-    expect_packets_match(make(lens, Representation::Refined), Tracer::kPacket);
+    const Tracer split = make(lens, Representation::Refined);
+    EXPECT_FALSE(split.lockstep());  // a split sample's branches go one after another
+    expect_packets_match(split, Tracer::kPacket);
     const Built scratch = build(kScratch);
     for (auto r : {Representation::Refined, Representation::MeshOnly}) {
         SCOPED_TRACE(to_string(r));

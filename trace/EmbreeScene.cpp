@@ -34,6 +34,24 @@ void skip_filter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
+// The packet's context: each ray's skip (EmbreeScene::PacketSkip), found by the ray's id.
+struct PacketContext {
+    RTCIntersectContext ctx;
+    const EmbreeScene::PacketSkip* skip = nullptr;
+};
+
+void packet_skip_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* q = reinterpret_cast<const PacketContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i]) continue;
+        const unsigned id = RTCRayN_id(args->ray, args->N, i);
+        if (!q->skip->on[id]) continue;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        const float t = RTCRayN_tfar(args->ray, args->N, i);
+        if (prim == q->skip->prim[id] && t < q->skip->until[id]) args->valid[i] = 0;
+    }
+}
+
 void patch_bounds(const RTCBoundsFunctionArguments* args) {
     const auto* patches = static_cast<const std::vector<Patch>*>(args->geometryUserPtr);
     const Aabb& b = (*patches)[args->primID].bounds;
@@ -190,12 +208,17 @@ Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, doub
 
 bool EmbreeScene::packets_supported() const { return impl_->masks && impl_->tri_geom != RTC_INVALID_GEOMETRY_ID; }
 
-void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out) const {
+void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip) const {
     if (n < 0 || n > kPacket) throw std::invalid_argument("EmbreeScene::intersect_packet: more rays than a packet holds");
     if (!packets_supported()) throw std::logic_error("EmbreeScene::intersect_packet: this scene cannot take packets");
-    RTCIntersectContext ctx;
+    PacketContext pc;
+    RTCIntersectContext& ctx = pc.ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    if (skip) {
+        pc.skip = skip;
+        ctx.filter = packet_skip_filter;
+    }
     alignas(64) int valid[kPacket];
     alignas(64) RTCRayHit16 rh;
     for (int i = 0; i < kPacket; ++i) {

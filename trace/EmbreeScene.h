@@ -36,8 +36,15 @@ public:
     // against the TRIANGLES only (the user patches carry another geometry mask): out[i] is what
     // intersect(o[i], d[i], 0, inf) returns whenever no patch lies before that triangle (the
     // caller checks; Tracer::refined_hit). Requires packets_supported().
+    // `skip` (optional): per ray, the one triangle to ignore while its t < until, exactly as
+    // intersect's skip list of one ignores it (a ray spawned off a facet).
     static constexpr int kPacket = 16;
-    void intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out) const;
+    struct PacketSkip {
+        std::uint32_t prim[kPacket];
+        bool on[kPacket];
+        double until[kPacket];
+    };
+    void intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip = nullptr) const;
     // Whether this Embree build honours ray masks (RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED),
     // without which a packet would reach the patches' single-ray callback.
     bool packets_supported() const;

@@ -230,6 +230,8 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
     }
     packets_ = options_.representation != Representation::Analytic && user_patches_.size() <= kLinearScanLimit &&
                embree_->packets_supported();
+    lockstep_ = packets_ && (scene.tracing.estimator == Estimator::Sample || scene.tracing.split_depth == 0) &&
+                !media_->graded() && !(scene.object.absorption > 0);
     face_normals_.resize(tri_mesh_.num_triangles());
     for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
 }
@@ -763,11 +765,34 @@ Tracer::Hit Tracer::walk_hit(const State& st, const MediumInfo& m, PathStats& st
 
 template <bool Principal>
 void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, SplitStack* split, const Hit* first) const {
+    for (;; ++st.depth) {
+        if (!begin_segment(st, stats, rec)) return;
+        const Hit h = first ? *first : propagate(st, stats);
+        first = nullptr;
+        if (!interact<Principal>(st, h, rng, stats, rec, split)) return;
+    }
+}
+
+bool Tracer::begin_segment(State& st, PathStats& stats, PrincipalPath* rec) const {
+    const int depth = st.depth;
+    if (depth >= options_.max_depth) {
+        ++stats.truncated;
+        stats.lost_weight += st.weight;
+        if (rec) rec->truncated = true;
+        st.weight = 0;
+        return false;
+    }
+    if (rec) rec->segments.push_back({st.o, st.d, st.medium, st.skip, st.skip_prim, st.skip_until, st.escaped});
+    return true;
+}
+
+template <bool Principal>
+bool Tracer::interact(State& st, const Hit& h, Rng* rng, PathStats& stats, PrincipalPath* rec, SplitStack* split) const {
     const SurfaceTable& table = solid_.surfaces;
     const double alpha = scene_.object.absorption;
     // Spawns the ray leaving the interface h along nd (unit; nf the normal on the incident side)
     // into `s`: false (and counted) if the direction is not finite.
-    const auto spawn = [&](State& s, const Hit& h, const Vec3& nd, const Vec3& nf) {
+    const auto spawn = [&](State& s, const Vec3& nd, const Vec3& nf) {
         if (!is_finite(nd)) {
             ++stats.nan_events;
             return false;
@@ -793,154 +818,143 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, Spli
         }
         return true;
     };
-    for (;; ++st.depth) {
-        const int depth = st.depth;
-        if (depth >= options_.max_depth) {
-            ++stats.truncated;
-            stats.lost_weight += st.weight;
-            if (rec) rec->truncated = true;
-            st.weight = 0;
-            return;
-        }
-        if (rec) rec->segments.push_back({st.o, st.d, st.medium, st.skip, st.skip_prim, st.skip_until, st.escaped});
-        const Hit h = first ? *first : propagate(st, stats);
-        first = nullptr;
-        ++stats.segments;
-        if (h.repaired) st.medium = h.medium;  // the geometry's medium for this segment
-        if (h.lost) {
-            ++stats.lost;
-            stats.lost_weight += st.weight;
-            if (rec) rec->lost = true;
-            st.weight = 0;
-            return;
-        }
-        if (!h.found) return;  // escaped: the caller looks for the display
-        if (!is_finite(h.p) || !is_finite(h.n_out) || !is_finite(h.d_in) || !std::isfinite(h.n_from)) {
-            ++stats.nan_events;
-            if (rec) rec->nan = true;
-            st.weight = 0;
-            return;
-        }
-        if (alpha > 0 && (*media_)[st.medium].attenuates) {
-            const double keep = std::exp(-alpha * h.length);  // Beer-Lambert over the (curved) segment
-            stats.absorbed_weight += st.weight * (1 - keep);
-            st.weight *= keep;
-        }
-        const SurfaceInfo& s = table[h.tag];
-        if (st.defect < 0) {  // the segment through a smooth inclusion comes before the surface ending it
-            const int k = st.medium.defect();
-            if (k >= 0 && scene_.defects[static_cast<size_t>(k)].segment_min_rho2(st.o, h.p) < 1.0) st.defect = k;
-            else if (s.optical && s.defect >= 0) st.defect = s.defect;
-        }
-        const Vec3& d_in = h.d_in;
-        const bool entering = dot(d_in, h.n_out) < 0;  // crossing from `outside` into `inside`
-        const Medium from = entering ? s.outside : s.inside;
-        Medium to = entering ? s.inside : s.outside;
-        // A smooth inhomogeneity clipped by a face: a ray entering the glass through the face
-        // where the inhomogeneity reaches it enters the inhomogeneity's medium (the index there
-        // is its field's, continuous with the glass's at rho = 1).
-        if (to == Medium::Glass && s.defect < 0)
-            for (int k : face_inclusions_)
-                if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(h.p, h.p) < 1.0) to = Medium::inclusion(k);
-        const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
-        Vec3 nd;
-        bool split_here = false;
-        if (!s.optical) {
-            // A smooth inhomogeneity's boundary: the index is continuous, so the ray keeps its
-            // direction and only changes how it propagates. The part of the boundary outside the
-            // glass (a face clips the inhomogeneity) is met by rays in the air: nothing changes.
-            nd = d_in;
-            if (st.medium == from) st.medium = to;
-        } else {
-            if (rec) {
-                rec->vertices.push_back(h.p);
-                rec->tags.push_back(h.tag);
-                rec->media.push_back(st.medium);
-            }
-            if (to == Medium::Absorber) {
-                ++stats.absorbed_particle;
-                stats.absorbed_weight += st.weight;
-                if (rec) rec->absorbed = true;
-                st.weight = 0;
-                return;
-            }
-            if (s.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) {
-                ++stats.absorbed_rim;
-                stats.absorbed_weight += st.weight;
-                if (rec) rec->absorbed = true;
-                st.weight = 0;
-                return;
-            }
-            // The local indices on both sides of the interface.
-            const double eta = h.n_from / index_at(to, h.p);
-            const double cos_i = -dot(d_in, nf);
-            const FresnelResult F = fresnel(cos_i, eta);
-            bool reflect_it;
-            if (F.total_internal_reflection) {
-                reflect_it = true;
-                ++stats.tir;
-                if (rec) ++rec->tir;
-            } else if (Principal) {
-                reflect_it = false;
-            } else if (split && st.splits_left > 0) {
-                // Splitting. The sampled choice contributes w f_R (reflect, probability R) or w f_T
-                // (transmit, probability T), where f_R and f_T are what the rest of the path
-                // delivers after each branch; its expectation is R w E[f_R] + T w E[f_T]. Following
-                // both, with weights w R and w T, delivers that expectation itself: unbiased, and
-                // the Fresnel choice's variance is gone. The reflected branch waits on the stack
-                // with the splits this one has left; the transmitted one goes on here.
-                --st.splits_left;
-                ++stats.splits;
-                split_here = true;
-                const double w_reflected = st.weight * F.reflectance;
-                if (w_reflected > 0) {
-                    if (split->size >= kMaxSplitDepth)  // impossible by the capacity argument (SplitStack)
-                        throw std::logic_error("Tracer: split stack overflow");
-                    State& r = split->items[static_cast<size_t>(split->size)];
-                    r = st;
-                    r.weight = w_reflected;
-                    r.depth = depth + 1;  // it resumes at the next interaction
-                    if (spawn(r, h, normalize(reflect(d_in, nf)), nf)) ++split->size;
-                }
-                st.weight *= 1.0 - F.reflectance;
-                reflect_it = false;
-            } else {
-                reflect_it = rng->uniform() < F.reflectance;
-                ++st.random_choices;
-            }
-            if (reflect_it) {
-                nd = reflect(d_in, nf);
-                if (!F.total_internal_reflection) ++stats.reflections;
-            } else {
-                nd = refract(d_in, nf, eta, cos_i, F.cos_t);
-                st.medium = to;
-                st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
-                             from == Medium::Glass && to == Medium::Air;
-                if (!split_here) ++stats.transmissions;  // a split counts as one split
-                if (rec) rec->transmission *= 1.0 - F.reflectance;
-            }
-            nd = normalize(nd);
-        }
-        if (!spawn(st, h, nd, nf)) {
-            if (rec) rec->nan = true;
-            st.weight = 0;
-            return;
-        }
-        // Russian roulette: survive with probability q, weight / q, so the expected weight is
-        // unchanged (q (w / q) + (1 - q) 0 = w). A split interaction is exempt: its branches stay
-        // deterministic, which is what makes the low orders exact. Past the split depth a branch
-        // is an ordinary sampled path and meets roulette at the same interactions as one.
-        if (!Principal && !split_here && depth + 1 >= options_.rr_depth) {
-            ++st.random_choices;
-            if (rng->uniform() >= options_.rr_survival) {
-                ++stats.roulette_kills;
-                if (rec) rec->roulette = true;
-                st.weight = 0;
-                return;
-            }
-            st.weight /= options_.rr_survival;
-        }
+    const int depth = st.depth;
+    ++stats.segments;
+    if (h.repaired) st.medium = h.medium;  // the geometry's medium for this segment
+    if (h.lost) {
+        ++stats.lost;
+        stats.lost_weight += st.weight;
+        if (rec) rec->lost = true;
+        st.weight = 0;
+        return false;
     }
+    if (!h.found) return false;  // escaped: the caller looks for the display
+    if (!is_finite(h.p) || !is_finite(h.n_out) || !is_finite(h.d_in) || !std::isfinite(h.n_from)) {
+        ++stats.nan_events;
+        if (rec) rec->nan = true;
+        st.weight = 0;
+        return false;
+    }
+    if (alpha > 0 && (*media_)[st.medium].attenuates) {
+        const double keep = std::exp(-alpha * h.length);  // Beer-Lambert over the (curved) segment
+        stats.absorbed_weight += st.weight * (1 - keep);
+        st.weight *= keep;
+    }
+    const SurfaceInfo& s = table[h.tag];
+    if (st.defect < 0) {  // the segment through a smooth inclusion comes before the surface ending it
+        const int k = st.medium.defect();
+        if (k >= 0 && scene_.defects[static_cast<size_t>(k)].segment_min_rho2(st.o, h.p) < 1.0) st.defect = k;
+        else if (s.optical && s.defect >= 0) st.defect = s.defect;
+    }
+    const Vec3& d_in = h.d_in;
+    const bool entering = dot(d_in, h.n_out) < 0;  // crossing from `outside` into `inside`
+    const Medium from = entering ? s.outside : s.inside;
+    Medium to = entering ? s.inside : s.outside;
+    // A smooth inhomogeneity clipped by a face: a ray entering the glass through the face
+    // where the inhomogeneity reaches it enters the inhomogeneity's medium (the index there
+    // is its field's, continuous with the glass's at rho = 1).
+    if (to == Medium::Glass && s.defect < 0)
+        for (int k : face_inclusions_)
+            if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(h.p, h.p) < 1.0) to = Medium::inclusion(k);
+    const Vec3 nf = entering ? h.n_out : -h.n_out;  // normal on the incident side
+    Vec3 nd;
+    bool split_here = false;
+    if (!s.optical) {
+        // A smooth inhomogeneity's boundary: the index is continuous, so the ray keeps its
+        // direction and only changes how it propagates. The part of the boundary outside the
+        // glass (a face clips the inhomogeneity) is met by rays in the air: nothing changes.
+        nd = d_in;
+        if (st.medium == from) st.medium = to;
+    } else {
+        if (rec) {
+            rec->vertices.push_back(h.p);
+            rec->tags.push_back(h.tag);
+            rec->media.push_back(st.medium);
+        }
+        if (to == Medium::Absorber) {
+            ++stats.absorbed_particle;
+            stats.absorbed_weight += st.weight;
+            if (rec) rec->absorbed = true;
+            st.weight = 0;
+            return false;
+        }
+        if (s.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) {
+            ++stats.absorbed_rim;
+            stats.absorbed_weight += st.weight;
+            if (rec) rec->absorbed = true;
+            st.weight = 0;
+            return false;
+        }
+        // The local indices on both sides of the interface.
+        const double eta = h.n_from / index_at(to, h.p);
+        const double cos_i = -dot(d_in, nf);
+        const FresnelResult F = fresnel(cos_i, eta);
+        bool reflect_it;
+        if (F.total_internal_reflection) {
+            reflect_it = true;
+            ++stats.tir;
+            if (rec) ++rec->tir;
+        } else if (Principal) {
+            reflect_it = false;
+        } else if (split && st.splits_left > 0) {
+            // Splitting. The sampled choice contributes w f_R (reflect, probability R) or w f_T
+            // (transmit, probability T), where f_R and f_T are what the rest of the path
+            // delivers after each branch; its expectation is R w E[f_R] + T w E[f_T]. Following
+            // both, with weights w R and w T, delivers that expectation itself: unbiased, and
+            // the Fresnel choice's variance is gone. The reflected branch waits on the stack
+            // with the splits this one has left; the transmitted one goes on here.
+            --st.splits_left;
+            ++stats.splits;
+            split_here = true;
+            const double w_reflected = st.weight * F.reflectance;
+            if (w_reflected > 0) {
+                if (split->size >= kMaxSplitDepth)  // impossible by the capacity argument (SplitStack)
+                    throw std::logic_error("Tracer: split stack overflow");
+                State& r = split->items[static_cast<size_t>(split->size)];
+                r = st;
+                r.weight = w_reflected;
+                r.depth = depth + 1;  // it resumes at the next interaction
+                if (spawn(r, normalize(reflect(d_in, nf)), nf)) ++split->size;
+            }
+            st.weight *= 1.0 - F.reflectance;
+            reflect_it = false;
+        } else {
+            reflect_it = rng->uniform() < F.reflectance;
+            ++st.random_choices;
+        }
+        if (reflect_it) {
+            nd = reflect(d_in, nf);
+            if (!F.total_internal_reflection) ++stats.reflections;
+        } else {
+            nd = refract(d_in, nf, eta, cos_i, F.cos_t);
+            st.medium = to;
+            st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
+                         from == Medium::Glass && to == Medium::Air;
+            if (!split_here) ++stats.transmissions;  // a split counts as one split
+            if (rec) rec->transmission *= 1.0 - F.reflectance;
+        }
+        nd = normalize(nd);
+    }
+    if (!spawn(st, nd, nf)) {
+        if (rec) rec->nan = true;
+        st.weight = 0;
+        return false;
+    }
+    // Russian roulette: survive with probability q, weight / q, so the expected weight is
+    // unchanged (q (w / q) + (1 - q) 0 = w). A split interaction is exempt: its branches stay
+    // deterministic, which is what makes the low orders exact. Past the split depth a branch
+    // is an ordinary sampled path and meets roulette at the same interactions as one.
+    if (!Principal && !split_here && depth + 1 >= options_.rr_depth) {
+        ++st.random_choices;
+        if (rng->uniform() >= options_.rr_survival) {
+            ++stats.roulette_kills;
+            if (rec) rec->roulette = true;
+            st.weight = 0;
+            return false;
+        }
+        st.weight /= options_.rr_survival;
+    }
+    return true;
 }
 
 Tracer::FirstHit Tracer::first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const {
@@ -1035,17 +1049,94 @@ void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, R
         }
         return;
     }
+    if (lockstep_) {
+        sample_lockstep(n, origins, directions, rngs, stats, out, ends);
+        return;
+    }
     // The first segment draws no random number, so finding it ahead of the path changes nothing
     // the path draws.
     Hit h[kPacket];
-    packet_hits(n, origins, directions, h, stats);
+    packet_hits(n, origins, directions, h, &stats, 0);
     for (int i = 0; i < n; ++i) {
         sample_paths_from(origins[i], directions[i], rngs[i], stats, out, &h[i]);
         ends[i] = out.size();
     }
 }
 
-void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats& stats) const {
+// A pixel's camera samples side by side: every live path's next segment in one packet query.
+// Rays of one pixel stay nearly parallel and close together through the object (most of them are
+// transmitted at every interface), so each segment's packet shares its BVH traversal as the
+// camera rays' does. Tracing them side by side changes nothing any path computes: each draws from
+// its own stream (rngs[i]) in its own order, each candidate is what its single query returns
+// (intersect_packet skips each ray's own triangle as the single query does; refined_hit checks the
+// ellipsoids the packet does not see), and each path counts into its own PathStats. Those are
+// summed after the packet in sample order: their integers in any order, and their weight sums
+// exactly as one path after another adds to them, since each path adds to each at most once
+// (lockstep() holds only without absorption in the glass, whose Beer-Lambert share is added on
+// every segment).
+void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                             std::vector<PathResult>& out, size_t* ends) const {
+    State st[kPacket];
+    PathStats lane[kPacket];
+    Hit h[kPacket];
+    bool live[kPacket];
+    packet_hits(n, origins, directions, h, lane, 1);
+    for (int i = 0; i < n; ++i) {
+        st[i].o = origins[i];
+        st[i].d = directions[i];
+        st[i].medium = Medium::Air;
+        ++lane[i].paths;
+        live[i] = begin_segment(st[i], lane[i], nullptr);
+    }
+    for (;;) {
+        int ids[kPacket];
+        int m = 0;
+        bool any = false;
+        for (int i = 0; i < n; ++i) {
+            if (!live[i]) continue;
+            if (!interact<false>(st[i], h[i], &rngs[i], lane[i], nullptr, nullptr)) {
+                live[i] = false;
+                continue;
+            }
+            ++st[i].depth;
+            if (!begin_segment(st[i], lane[i], nullptr)) {
+                live[i] = false;
+                continue;
+            }
+            any = true;
+            if (st[i].escaped)
+                h[i] = propagate(st[i], lane[i]);  // out of a convex object: nothing to query
+            else
+                ids[m++] = i;
+        }
+        if (!any) break;
+        if (m >= kMinLockstep) {
+            Vec3 o[kPacket], d[kPacket];
+            EmbreeScene::PacketSkip skip;
+            Candidate c[kPacket];
+            for (int j = 0; j < m; ++j) {
+                const State& s = st[ids[j]];
+                o[j] = s.o;
+                d[j] = s.d;
+                skip.prim[j] = s.skip_prim;
+                skip.on[j] = s.skip;
+                skip.until[j] = s.skip_until;
+            }
+            embree_->intersect_packet(o, d, m, c, &skip);
+            for (int j = 0; j < m; ++j) h[ids[j]] = propagate(st[ids[j]], lane[ids[j]], &c[j]);
+        } else {
+            for (int j = 0; j < m; ++j) h[ids[j]] = propagate(st[ids[j]], lane[ids[j]]);
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        out.push_back(branch_result(st[i], lane[i]));
+        ends[i] = out.size();
+        stats.merge(lane[i]);
+    }
+}
+
+void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats,
+                         int stride) const {
     // One coherent packet of triangle candidates, each finished as its own query would be
     // (refined_hit, mesh_only_hit).
     Candidate c[kPacket];
@@ -1055,7 +1146,7 @@ void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit
         st.o = origins[i];
         st.d = directions[i];
         st.medium = Medium::Air;
-        out[i] = propagate(st, stats, &c[i]);
+        out[i] = propagate(st, stats[i * stride], &c[i]);
     }
 }
 
@@ -1063,7 +1154,7 @@ void Tracer::first_hits(int n, const Vec3* origins, const Vec3* directions, Firs
     if (n < 0 || n > kPacket) throw std::invalid_argument("Tracer::first_hits: more rays than a packet holds");
     Hit h[kPacket];
     if (packets_ && n >= 2) {
-        packet_hits(n, origins, directions, h, stats);
+        packet_hits(n, origins, directions, h, &stats, 0);
     } else {
         for (int i = 0; i < n; ++i) {
             State st;

@@ -158,6 +158,13 @@ public:
     // ellipsoids at most (each camera ray checks them: see refined_hit) and an Embree that honours
     // ray masks.
     bool packets() const { return packets_; }
+    // Whether sample_packet traces whole paths side by side with a packet query per segment
+    // (sample_lockstep), not only their first segments: with packets(), the sample estimator (a
+    // split sample's branches are traced one after another), straight media only, and no
+    // absorption in the glass (each path then adds to the weight sums of PathStats at most once,
+    // at its end, so summing lane by lane after the packet gives the very sums, bit for bit, of
+    // the paths traced one after another).
+    bool lockstep() const { return lockstep_; }
     // A read-only hook for tests that judge paths independently (tests/trace_stress.cpp): one path
     // from `origin`, which the caller says lies in `medium` (the tracer does not look it up), with
     // every vertex, tag and segment medium recorded. With `rng` the interactions are chosen as in
@@ -206,7 +213,12 @@ private:
     // returns: no ellipsoid patch (which the packet does not see) can lie before it.
     bool packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const;
     // The first segments' hits of n (2 <= n <= kPacket) camera rays from one packet (packets_).
-    void packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats& stats) const;
+    // Ray i counts into stats[i * stride]: all into one (stride 0) or each into its own (1,
+    // sample_lockstep).
+    void packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats, int stride) const;
+    // The fewest live paths sample_lockstep queries in one packet; fewer query alone (a
+    // 16-wide packet of one or two rays costs more than their single queries).
+    static constexpr int kMinLockstep = 2;
     // Curved segments.
     Hit grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
     Hit walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
@@ -220,6 +232,16 @@ private:
     template <bool Principal>
     void run(State& st, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split,
              const Hit* first = nullptr) const;
+    // run's two halves, for paths traced side by side (sample_lockstep): before a segment, the
+    // depth cap and the record (false: the path ended); after it, the interaction at its hit h
+    // and the spawn of the next ray (false: the path ended or left; branch_result says where).
+    bool begin_segment(State& st, PathStats& stats, PrincipalPath* record) const;
+    template <bool Principal>
+    bool interact(State& st, const Hit& h, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split) const;
+    // The camera samples of sample_packet traced side by side, one segment of each live path at a
+    // time, each segment's triangle candidates from one packet query (lockstep()).
+    void sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                         std::vector<PathResult>& out, size_t* ends) const;
     // sample_paths with the first segment's hit found already (or nullptr).
     void sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
                            std::vector<PathResult>& out, const Hit* first) const;
@@ -284,6 +306,7 @@ private:
     double scale_ = 1;
     bool convex_ = false;  // the object is a convex body (Lens::is_convex)
     bool packets_ = false;  // sample_packet traces first segments in packets
+    bool lockstep_ = false;  // ... and whole paths side by side (lockstep())
 };
 
 }  // namespace ltm
