@@ -1,0 +1,249 @@
+#pragma once
+// SIMD over the rays of a packet: one lane per ray (trace/LaneKernels.cpp, the kernels of the
+// lockstep tracer, Tracer::lockstep).
+//
+// A lane value is a GCC/Clang vector as wide as the instruction set the including file is compiled
+// for: 8 doubles with AVX-512, 4 with AVX2, 2 otherwise (trace/LaneKernels.cpp is compiled for
+// each, CMakeLists.txt). The lane functions live in a namespace of that set (LTM_LANE_ISA), so
+// files compiled for different sets never share one. A vector wider than the compiled set would
+// be split by the compiler into pieces, element by element where a comparison is involved, and
+// the compilers reject or warn of it as an ABI change: hence one width per set, not one per
+// program with target attributes.
+//
+// Bit for bit. Every lane function below is the twin of a scalar function of the tracer (named in
+// its comment) and performs the same IEEE operations on the same operands in the same order:
+// + - * / and sqrt are correctly rounded whatever the instruction set, there is no contraction
+// into fused multiply-adds (-ffp-contract=off, CMakeLists.txt), and a branch of the scalar code
+// becomes a select of both sides. So each lane's result is the scalar function's result for that
+// lane's inputs, bit for bit, on every machine (tests/trace_lanes.cpp checks every twin against
+// its scalar function on random and edge-case inputs, and the kernels of every set against each
+// other; tests/trace_packets.cpp whole paths).
+// Where a twin cannot reproduce its scalar function (a root the twin does not solve, a NaN), the
+// caller takes that lane back to the scalar code; the twins only ever cover common cases exactly.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "geometry/Vec3.h"
+#include "trace/Optics.h"
+#include "trace/Patch.h"
+#include "trace/TraceTolerance.h"
+
+#if defined(__AVX512F__)
+#define LTM_LANE_ISA isa_x86_64_v4
+#define LTM_LANE_WIDTH 8
+#elif defined(__AVX__)
+#define LTM_LANE_ISA isa_x86_64_v3
+#define LTM_LANE_WIDTH 4
+#else
+#define LTM_LANE_ISA isa_baseline
+#define LTM_LANE_WIDTH 2
+#endif
+
+namespace ltm::lanes {
+inline namespace LTM_LANE_ISA {
+
+inline constexpr int kLanes = LTM_LANE_WIDTH;
+using Real = double __attribute__((vector_size(8 * kLanes)));
+// Comparisons give all bits set (true) or none (false) per lane; also the integer lanes.
+using Mask = std::int64_t __attribute__((vector_size(8 * kLanes)));
+
+#define LTM_LANE inline __attribute__((always_inline))
+
+LTM_LANE Real splat(double x) {
+    Real r;
+    for (int i = 0; i < kLanes; ++i) r[i] = x;
+    return r;
+}
+LTM_LANE Mask splat_mask(bool b) {
+    Mask r;
+    for (int i = 0; i < kLanes; ++i) r[i] = b ? -1 : 0;
+    return r;
+}
+LTM_LANE Mask as_bits(const Real& x) { return (Mask)x; }
+LTM_LANE Real as_real(const Mask& m) { return (Real)m; }
+// m ? a : b per lane (the bits of a where m is set).
+LTM_LANE Real select(const Mask& m, const Real& a, const Real& b) {
+    return as_real((as_bits(a) & m) | (as_bits(b) & ~m));
+}
+LTM_LANE Mask select(const Mask& m, const Mask& a, const Mask& b) { return (a & m) | (b & ~m); }
+LTM_LANE bool any(const Mask& m) {
+    std::int64_t r = 0;
+    for (int i = 0; i < kLanes; ++i) r |= m[i];
+    return r != 0;
+}
+// std::sqrt per lane (correctly rounded: the same bits as the scalar call).
+LTM_LANE Real sqrt(const Real& x) {
+    Real r;
+    for (int i = 0; i < kLanes; ++i) r[i] = __builtin_sqrt(x[i]);
+    return r;
+}
+inline constexpr std::int64_t kSignBit = INT64_MIN;
+// std::fabs and std::copysign: the sign bit cleared, or taken from b.
+LTM_LANE Real abs(const Real& x) { return as_real(as_bits(x) & ~kSignBit); }
+LTM_LANE Real copysign(const Real& mag, const Real& sign) {
+    return as_real((as_bits(mag) & ~kSignBit) | (as_bits(sign) & kSignBit));
+}
+// std::min and std::max of two: (b < a) ? b : a and (a < b) ? b : a.
+LTM_LANE Real min(const Real& a, const Real& b) { return select(b < a, b, a); }
+LTM_LANE Real max(const Real& a, const Real& b) { return select(a < b, b, a); }
+// std::isfinite per lane.
+LTM_LANE Mask finite(const Real& x) { return abs(x) < splat(INFINITY); }  // false for NaN too
+
+// Three lane values: a Vec3 per lane. The operators are Vec3's, component by component.
+struct V3 {
+    Real x, y, z;
+};
+LTM_LANE V3 operator+(const V3& a, const V3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+LTM_LANE V3 operator-(const V3& a, const V3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+LTM_LANE V3 operator*(const V3& a, const Real& s) { return {a.x * s, a.y * s, a.z * s}; }
+LTM_LANE V3 operator/(const V3& a, const Real& s) { return {a.x / s, a.y / s, a.z / s}; }
+LTM_LANE V3 operator-(const V3& a) { return {-a.x, -a.y, -a.z}; }
+LTM_LANE V3 splat(const Vec3& v) { return {splat(v.x), splat(v.y), splat(v.z)}; }
+LTM_LANE Real dot(const V3& a, const V3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+LTM_LANE Real length(const V3& v) { return sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+LTM_LANE V3 normalize(const V3& v) { return v / length(v); }
+LTM_LANE V3 select(const Mask& m, const V3& a, const V3& b) {
+    return {select(m, a.x, b.x), select(m, a.y, b.y), select(m, a.z, b.z)};
+}
+LTM_LANE Mask finite(const V3& v) { return finite(v.x) & finite(v.y) & finite(v.z); }
+
+// ---- Roots (trace/Intersect.h) --------------------------------------------------------------------
+// The two roots of solve_quadratic ascending (lo <= hi), where `real` is set; elsewhere none.
+struct Quadratic {
+    Real lo, hi;
+    Mask real;
+};
+// solve_quadratic(a, b, c, disc) where a != 0 in every lane (the sphere's a = 1; the cylinder's
+// callers take a == 0 lanes apart): q = -(b + copysign(sqrt(disc), b)) / 2, t0 = q / a,
+// t1 = c / q (t0 where q = 0), ascending by std::min and std::max.
+LTM_LANE Quadratic solve_quadratic(const Real& a, const Real& b, const Real& c, const Real& disc) {
+    const Real q = splat(-0.5) * (b + copysign(sqrt(disc), b));
+    const Real t0 = q / a;
+    const Real t1 = select(q != splat(0.0), c / q, t0);
+    return {min(t0, t1), max(t0, t1), disc >= splat(0.0)};
+}
+// intersect_sphere(c, r, o, d): the discriminant from the line's distance to the centre.
+LTM_LANE Quadratic sphere_roots(const Vec3& centre, double radius, const V3& o, const V3& d) {
+    const V3 oc = o - splat(centre);
+    const Real b = dot(oc, d);
+    const V3 perp = oc - d * b;
+    const Real lp = length(perp), lo = length(oc);
+    const Real r = splat(radius);
+    // a = 1: q / 1 is q, which solve_quadratic's division gives too.
+    return solve_quadratic(splat(1.0), splat(2.0) * b, (lo - r) * (lo + r), splat(4.0) * (r - lp) * (r + lp));
+}
+// intersect_cylinder(c, u, r, o, d) (no roots where the ray is parallel to the axis, a = 0).
+LTM_LANE Quadratic cylinder_roots(const Vec3& centre, const Vec3& axis, double radius, const V3& o, const V3& d) {
+    const V3 u = splat(axis);
+    const V3 oc = o - splat(centre);
+    const V3 ocp = oc - u * dot(oc, u), dp = d - u * dot(d, u);
+    const Real a = dot(dp, dp);
+    const Mask axial = a == splat(0.0);
+    const Real a_safe = select(axial, splat(1.0), a);  // the lanes with a = 0 have no roots anyway
+    const Real b = dot(ocp, dp);
+    const V3 perp = ocp - dp * (b / a_safe);
+    const Real lp = length(perp), lo = length(ocp);
+    const Real r = splat(radius);
+    Quadratic q = solve_quadratic(a_safe, splat(2.0) * b, (lo - r) * (lo + r), splat(4.0) * a_safe * (r - lp) * (r + lp));
+    q.real &= ~axial;
+    return q;
+}
+
+// on_patch(p, o + d t) for a cap or the rim (Patch.h); closed patches are not lane patches.
+LTM_LANE Mask on_patch(const Patch& p, const V3& o, const V3& d, const Real& t) {
+    const V3 x = o + d * t;
+    if (p.kind == Patch::Kind::Rim) return (x.z >= splat(p.z_min)) & (x.z <= splat(p.z_max));
+    Mask on = ~(x.x * x.x + x.y * x.y > splat(p.rho2_max));
+    if (p.surface.kind == SurfaceKind::Sphere) {
+        const double zc = p.surface.origin.z;
+        on &= ~((x.z - splat(zc)) * splat(p.z_vertex - zc) <= splat(0.0));
+    }
+    return on;
+}
+// patch_hit(p, o, d, 0, inf) for a lane patch: the first root in (0, inf) on the patch, or +inf.
+// (patch_hit(p, o, d, 0, tmax) is this where it is below tmax and +inf elsewhere: the roots come
+// ascending, so the first on the patch below tmax is the first on the patch.)
+LTM_LANE Real patch_root(const Patch& p, const V3& o, const V3& d) {
+    const Surface& s = p.surface;
+    const Real inf = splat(INFINITY), zero = splat(0.0);
+    if (s.kind == SurfaceKind::Plane) {
+        // intersect(): one root dot(origin - o, axis) / dot(d, axis) unless the ray is parallel.
+        const V3 n = splat(s.axis);
+        const Real dn = dot(d, n);
+        const Real t = dot(splat(s.origin) - o, n) / dn;
+        const Mask ok = (dn != zero) & (t > zero) & (t < inf) & on_patch(p, o, d, t);
+        return select(ok, t, inf);
+    }
+    const Quadratic q = s.kind == SurfaceKind::Sphere ? sphere_roots(s.origin, s.radius, o, d)
+                                                      : cylinder_roots(s.origin, s.axis, s.radius, o, d);
+    const Mask ok_lo = q.real & (q.lo > zero) & (q.lo < inf) & on_patch(p, o, d, q.lo);
+    const Mask ok_hi = q.real & (q.hi > zero) & (q.hi < inf) & on_patch(p, o, d, q.hi);
+    return select(ok_lo, q.lo, select(ok_hi, q.hi, inf));
+}
+// segment_near(p, o, d, tmax) (Patch.h): the segment comes within the patch's bounding sphere.
+LTM_LANE Mask segment_near(const Patch& p, const V3& o, const V3& d, const Real& tmax) {
+    const V3 v = splat(p.centre) - o;
+    const Real vd = dot(v, d);
+    const Real lo = select(vd > splat(0.0), vd, splat(0.0));
+    const Real tc = select(tmax < lo, tmax, lo);
+    const V3 w = v - d * tc;
+    return dot(w, w) <= splat(p.bounding_radius * p.bounding_radius);
+}
+
+// ---- Surfaces (Tracer::on_surface, Intersect.h) -----------------------------------------------------
+// point_rounding_bound(s, p): kPointErrorUlps u of (max |p_i| + max |origin_i| + radius +
+// minor_radius + max semi-axis), summed in that order.
+LTM_LANE Real point_rounding_bound(const Surface& s, const V3& p) {
+    constexpr double u = std::numeric_limits<double>::epsilon() * 0.5;
+    const Real px = abs(p.x), py = abs(p.y), pz = abs(p.z);
+    // std::max({a, b, c}): the first largest, by <.
+    const Real pmax = max(max(px, py), pz);
+    const double omax = std::max({std::fabs(s.origin.x), std::fabs(s.origin.y), std::fabs(s.origin.z)});
+    const double smax = std::max({s.semi_axes.x, s.semi_axes.y, s.semi_axes.z});
+    const Real mag = pmax + splat(omax) + splat(s.radius) + splat(s.minor_radius) + splat(smax);
+    return splat(trace_tol::kPointErrorUlps * u) * mag;
+}
+// The unit normal (inside -> outside, by normal_sign) and spawn offset of a hit at p on a sphere
+// or a plane, as Tracer::on_surface computes them (the sphere's one distance |p - c| for both).
+LTM_LANE void cap_surface(const Surface& s, int normal_sign, const V3& p, V3& n_out, Real& offset) {
+    const Real sign = splat(static_cast<double>(normal_sign));
+    const Real bounds = splat(trace_tol::kSpawnOffsetBounds);
+    if (s.kind == SurfaceKind::Sphere) {
+        const V3 v = p - splat(s.origin);
+        const Real r = length(v);
+        n_out = (v / r) * sign;
+        offset = bounds * (abs(r - splat(s.radius)) + point_rounding_bound(s, p));
+    } else {  // a plane: Surface::normal is its axis, signed_distance dot(p - origin, axis)
+        n_out = splat(s.axis) * sign;
+        offset = bounds * (abs(dot(p - splat(s.origin), splat(s.axis))) + point_rounding_bound(s, p));
+    }
+}
+
+// ---- Optics (trace/Optics.h) ----------------------------------------------------------------------
+// fresnel(cos_i, eta): where `tir` is set the reflectance is 1 and cos_t 0, as the scalar returns.
+struct Fresnel {
+    Real reflectance, cos_t;
+    Mask tir;
+};
+LTM_LANE Fresnel fresnel(const Real& cos_i_in, const Real& eta) {
+    const Real one = splat(1.0);
+    const Real c = abs(cos_i_in);
+    const Real cos_i = select(c <= one, c, one);  // 1 for a NaN, as the scalar
+    const Real sin2_t = eta * eta * (one - cos_i) * (one + cos_i);
+    const Mask tir = sin2_t >= one;
+    const Real cos_t = sqrt((one - sin2_t));
+    const Real rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    const Real rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    const Real r = splat(0.5) * (rs * rs + rp * rp);
+    return {select(tir, one, r), select(tir, splat(0.0), cos_t), tir};
+}
+// reflect(d, n) and refract(d, n, eta, cos_i, cos_t).
+LTM_LANE V3 reflect(const V3& d, const V3& n) { return d - n * (splat(2.0) * dot(d, n)); }
+LTM_LANE V3 refract(const V3& d, const V3& n, const Real& eta, const Real& cos_i, const Real& cos_t) {
+    return d * eta + n * (eta * cos_i - cos_t);
+}
+
+}  // namespace LTM_LANE_ISA
+}  // namespace ltm::lanes
