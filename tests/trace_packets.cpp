@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstring>
 #include <memory>
+#include <vector>
 
 #include "tests/SceneFixture.h"
 #include "trace/Render.h"
@@ -83,20 +84,20 @@ PathStats expect_packets_match(const Tracer& t, int size) {
         // Each stream is left where the single path left it.
         for (size_t s = 0; s < o.size(); ++s) EXPECT_TRUE(same_bits(packed[s].uniform(), single[s].uniform()));
     }
-    EXPECT_EQ(packet_stats.paths, single_stats.paths);
-    EXPECT_EQ(packet_stats.segments, single_stats.segments);
-    EXPECT_EQ(packet_stats.on_display, single_stats.on_display);
-    EXPECT_EQ(packet_stats.off_display, single_stats.off_display);
-    EXPECT_EQ(packet_stats.reflections, single_stats.reflections);
-    EXPECT_EQ(packet_stats.transmissions, single_stats.transmissions);
-    EXPECT_EQ(packet_stats.absorbed_particle, single_stats.absorbed_particle);
-    EXPECT_EQ(packet_stats.truncated, single_stats.truncated);
-    EXPECT_EQ(packet_stats.leaks_unresolved, single_stats.leaks_unresolved);
-    // The same candidates: a packet that did not skip the facet a ray just left would hand
-    // refined_hit a spurious candidate the single query never sees.
-    EXPECT_EQ(packet_stats.spurious_candidates, single_stats.spurious_candidates);
-    EXPECT_EQ(packet_stats.guard_hits, single_stats.guard_hits);
-    EXPECT_EQ(packet_stats.leak_retries, single_stats.leak_retries);
+    // Every counter (but the packet counters themselves, which one-at-a-time paths leave at 0).
+    const auto counters = [](const PathStats& p) {
+        return std::vector<std::uint64_t>{p.paths, p.segments, p.reflections, p.transmissions, p.tir,
+                                          p.absorbed_particle, p.absorbed_rim, p.on_display, p.off_display,
+                                          p.toward_camera, p.roulette_kills, p.truncated, p.nan_events, p.splits,
+                                          p.branches,
+                                          // The same candidates: a packet that did not skip the facet a ray
+                                          // just left would hand refined_hit a spurious candidate the single
+                                          // query never sees.
+                                          p.spurious_candidates, p.guard_hits, p.leak_retries, p.leaks_unresolved,
+                                          p.seam_repairs, p.edge_chords, p.grin_segments, p.grin_evaluations,
+                                          p.tet_crossings, p.lost, p.hamiltonian_violations, p.walk_boundary_exits};
+    };
+    EXPECT_EQ(counters(packet_stats), counters(single_stats));
     // The weight sums too, bit for bit: paths traced side by side (Tracer::sample_lockstep) are
     // summed in sample order after the packet, as one path after another adds to them.
     EXPECT_TRUE(same_bits(packet_stats.display_weight, single_stats.display_weight));
@@ -187,12 +188,60 @@ TEST(Packets, SplitEstimatorAndBooleanGlassMatchToo) {
     }
 }
 
-TEST(Packets, AnalyticTracesOneRayAtATimeWithTheSameResults) {
+// The analytic representation has no packet query: its paths go side by side with the object's
+// patches solved in SIMD lanes (trace/Lanes.h), and the rest (the bubbles near a segment, rim
+// hits, roulette, the depth cap, total internal reflection) in the scalar steps.
+TEST(Packets, AnalyticTracesWholePathsInSimdLanesWithTheSameResults) {
     const Built b = build(kLens);
-    const Tracer t = make(b, Representation::Analytic);
-    EXPECT_FALSE(t.packets());
-    const PathStats s = expect_packets_match(t, Tracer::kPacket);
-    EXPECT_EQ(s.packet_segments, 0u);
+    for (int max_depth : {TracerOptions{}.max_depth, 2}) {
+        SCOPED_TRACE(max_depth);
+        const Tracer t = make(b, Representation::Analytic, max_depth);
+        EXPECT_FALSE(t.packets());
+        ASSERT_TRUE(t.lockstep());
+        for (int size : {Tracer::kPacket, 5}) {
+            const PathStats s = expect_packets_match(t, size);
+            EXPECT_EQ(s.packet_segments, 0u);
+            EXPECT_GT(s.absorbed_particle, 0u);
+            if (max_depth == 2) {
+                EXPECT_GT(s.truncated, 0u);
+            }
+        }
+    }
+}
+
+// A ball lens (two hemispheres of one sphere, no rim) and a window (plane caps) with a bubble:
+// rays reflected inside the ball meet total internal reflection, and Russian roulette from the
+// second interaction on kills some paths; every lane still matches its path traced alone.
+TEST(Packets, AnalyticLanesMatchOnBallsWindowsAndUnderRoulette) {
+    const char* ball = R"(
+object: {type: sphere, radius: 6.0, ior: 1.9}
+defects:
+  - {type: bubble, center: [1.0, 0.5, 0.0], radius: 0.8}
+camera: {resolution: [7, 7], size: [13.0, 13.0], numerical_aperture: 0.05, samples_per_pixel: 24}
+display: {resolution: [30, 30], size: [60.0, 60.0], z: 40.0}
+seed: 5
+)";
+    const char* window = R"(
+object: {type: window, thickness: 5.0, diameter: 20.0, ior: 1.5}
+defects:
+  - {type: bubble, center: [2.0, -1.0, 0.0], radius: 1.0}
+camera: {resolution: [6, 6], size: [22.0, 22.0], numerical_aperture: 0.03, samples_per_pixel: 16}
+display: {resolution: [30, 30], size: [40.0, 40.0], z: 30.0}
+seed: 6
+)";
+    for (const char* yaml : {ball, window}) {
+        const Built b = build(yaml);
+        TracerOptions o;
+        o.representation = Representation::Analytic;
+        o.rr_depth = 2;
+        const Tracer t(b.scene, b.solid, o);
+        ASSERT_TRUE(t.lockstep());
+        const PathStats s = expect_packets_match(t, Tracer::kPacket);
+        EXPECT_GT(s.roulette_kills, 0u);
+        if (yaml == ball) {
+            EXPECT_GT(s.tir, 0u);
+        }
+    }
 }
 
 TEST(Packets, APacketHoldsAtMostSixteenSamples) {

@@ -8,17 +8,15 @@
 #include <stdexcept>
 
 #include "trace/Intersect.h"
+#include "trace/LaneKernels.h"
 #include "trace/Optics.h"
 #include "trace/TraceTolerance.h"
+#include "trace/TracerState.h"
 
 namespace ltm {
 
 namespace {
 using trace_tol::kFloatUlp;
-// Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
-// test each) instead of querying Embree's BVH, whose call overhead is larger (measured, not a
-// tolerance).
-constexpr size_t kLinearScanLimit = 16;
 
 // The same analytic surface (a ball's front and back hemispheres lie on one sphere).
 bool same_surface(const Surface& a, const Surface& b) {
@@ -71,55 +69,6 @@ void PathStats::merge(const PathStats& o) {
     lost_weight += o.lost_weight;
     absorbed_weight += o.absorbed_weight;
 }
-
-// One interface crossing found by propagate: the exact point, its surface, the unit normal
-// pointing from the surface's `inside` medium to its `outside`, and how the ray arrived there.
-struct Tracer::Hit {
-    bool found = false;
-    bool lost = false;      // a curved path in a closed medium found no exit
-    double t = INFINITY;    // the segment's parameter: distance (straight) or tau (curved)
-    double length = 0;      // arc length travelled (Beer-Lambert)
-    Vec3 p, n_out;
-    Vec3 d_in;              // unit direction arriving at p
-    double n_from = 1;      // the current medium's index at p
-    int tag = -1;
-    std::uint32_t prim = 0;
-    bool triangle = false;
-    double offset = 0;  // how far a spawned ray must start off the surface
-    int solved_patch = -1;  // an object patch already solved exactly over (0, t]
-    // The segment's medium, when the tracer's belief was wrong and the geometry repaired it (see
-    // Tracer::repair_medium): the path recorded this medium for the segment, not the belief.
-    bool repaired = false;
-    Medium medium = Medium::Air;
-};
-
-struct Tracer::State {
-    Vec3 o, d;
-    Medium medium = Medium::Air;
-    double weight = 1;
-    // The triangle just left, skipped by the next query while the ray is still within the band
-    // in which facet and surface can differ.
-    std::uint32_t skip_prim = 0;
-    bool skip = false;
-    double skip_until = 0;
-    // Left a convex object through one of its own faces into the outside air: nothing of the
-    // object (whose defects all lie inside it) can be met again.
-    bool escaped = false;
-    int defect = -1;  // PathResult::defect
-    int depth = 0;           // interactions so far (max_depth, rr_depth)
-    int splits_left = 0;     // Fresnel interactions this branch still splits (the split estimator)
-    int random_choices = 0;  // PathResult::random_choices
-};
-
-// The branches of a split camera sample that wait to be traced, depth first. Capacity: a split
-// pushes its reflected branch with one split fewer left than the branch had and the traced
-// branch continues with as many, so from bottom to top the stack holds strictly decreasing
-// numbers of splits left, all at least the traced branch's, all in [0, split_depth - 1]: at most
-// split_depth states, whatever the tree. A fixed array: no allocation per camera sample.
-struct Tracer::SplitStack {
-    std::array<State, kMaxSplitDepth> items;
-    int size = 0;
-};
 
 Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
     : scene_(scene),
@@ -230,7 +179,11 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
     }
     packets_ = options_.representation != Representation::Analytic && user_patches_.size() <= kLinearScanLimit &&
                embree_->packets_supported();
-    lockstep_ = packets_ && (scene.tracing.estimator == Estimator::Sample || scene.tracing.split_depth == 0) &&
+    analytic_lanes_ = options_.representation == Representation::Analytic &&
+                      user_patches_.size() <= kLinearScanLimit &&
+                      std::all_of(object_patches_.begin(), object_patches_.end(), lanes::lane_patch);
+    lockstep_ = (packets_ || analytic_lanes_) &&
+                (scene.tracing.estimator == Estimator::Sample || scene.tracing.split_depth == 0) &&
                 !media_->graded() && !(scene.object.absorption > 0);
     face_normals_.resize(tri_mesh_.num_triangles());
     for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
@@ -1042,7 +995,7 @@ void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, P
 void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                            std::vector<PathResult>& out, size_t* ends) const {
     if (n < 0 || n > kPacket) throw std::invalid_argument("Tracer::sample_packet: more samples than a packet holds");
-    if (!packets_ || n < 2) {
+    if (!(packets_ || lockstep_) || n < 2) {
         for (int i = 0; i < n; ++i) {
             sample_paths_from(origins[i], directions[i], rngs[i], stats, out, nullptr);
             ends[i] = out.size();
@@ -1060,78 +1013,6 @@ void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, R
     for (int i = 0; i < n; ++i) {
         sample_paths_from(origins[i], directions[i], rngs[i], stats, out, &h[i]);
         ends[i] = out.size();
-    }
-}
-
-// A pixel's camera samples side by side: every live path's next segment in one packet query.
-// Rays of one pixel stay nearly parallel and close together through the object (most of them are
-// transmitted at every interface), so each segment's packet shares its BVH traversal as the
-// camera rays' does. Tracing them side by side changes nothing any path computes: each draws from
-// its own stream (rngs[i]) in its own order, each candidate is what its single query returns
-// (intersect_packet skips each ray's own triangle as the single query does; refined_hit checks the
-// ellipsoids the packet does not see), and each path counts into its own PathStats. Those are
-// summed after the packet in sample order: their integers in any order, and their weight sums
-// exactly as one path after another adds to them, since each path adds to each at most once
-// (lockstep() holds only without absorption in the glass, whose Beer-Lambert share is added on
-// every segment).
-void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
-                             std::vector<PathResult>& out, size_t* ends) const {
-    State st[kPacket];
-    PathStats lane[kPacket];
-    Hit h[kPacket];
-    bool live[kPacket];
-    packet_hits(n, origins, directions, h, lane, 1);
-    for (int i = 0; i < n; ++i) {
-        st[i].o = origins[i];
-        st[i].d = directions[i];
-        st[i].medium = Medium::Air;
-        ++lane[i].paths;
-        live[i] = begin_segment(st[i], lane[i], nullptr);
-    }
-    for (;;) {
-        int ids[kPacket];
-        int m = 0;
-        bool any = false;
-        for (int i = 0; i < n; ++i) {
-            if (!live[i]) continue;
-            if (!interact<false>(st[i], h[i], &rngs[i], lane[i], nullptr, nullptr)) {
-                live[i] = false;
-                continue;
-            }
-            ++st[i].depth;
-            if (!begin_segment(st[i], lane[i], nullptr)) {
-                live[i] = false;
-                continue;
-            }
-            any = true;
-            if (st[i].escaped)
-                h[i] = propagate(st[i], lane[i]);  // out of a convex object: nothing to query
-            else
-                ids[m++] = i;
-        }
-        if (!any) break;
-        if (m >= kMinLockstep) {
-            Vec3 o[kPacket], d[kPacket];
-            EmbreeScene::PacketSkip skip;
-            Candidate c[kPacket];
-            for (int j = 0; j < m; ++j) {
-                const State& s = st[ids[j]];
-                o[j] = s.o;
-                d[j] = s.d;
-                skip.prim[j] = s.skip_prim;
-                skip.on[j] = s.skip;
-                skip.until[j] = s.skip_until;
-            }
-            embree_->intersect_packet(o, d, m, c, &skip);
-            for (int j = 0; j < m; ++j) h[ids[j]] = propagate(st[ids[j]], lane[ids[j]], &c[j]);
-        } else {
-            for (int j = 0; j < m; ++j) h[ids[j]] = propagate(st[ids[j]], lane[ids[j]]);
-        }
-    }
-    for (int i = 0; i < n; ++i) {
-        out.push_back(branch_result(st[i], lane[i]));
-        ends[i] = out.size();
-        stats.merge(lane[i]);
     }
 }
 

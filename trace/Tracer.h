@@ -158,12 +158,14 @@ public:
     // ellipsoids at most (each camera ray checks them: see refined_hit) and an Embree that honours
     // ray masks.
     bool packets() const { return packets_; }
-    // Whether sample_packet traces whole paths side by side with a packet query per segment
-    // (sample_lockstep), not only their first segments: with packets(), the sample estimator (a
-    // split sample's branches are traced one after another), straight media only, and no
-    // absorption in the glass (each path then adds to the weight sums of PathStats at most once,
-    // at its end, so summing lane by lane after the packet gives the very sums, bit for bit, of
-    // the paths traced one after another).
+    // Whether sample_packet traces whole paths side by side (sample_lockstep, trace/Lockstep.cpp),
+    // not only their first segments: each segment of the live paths from one packet query (the
+    // mesh representations, with packets()) or from the object's patches solved in SIMD lanes
+    // (analytic), and their interactions in SIMD lanes too. With the sample estimator (a split
+    // sample's branches are traced one after another), straight media only, and no absorption in
+    // the glass (each path then adds to the weight sums of PathStats at most once, at its end, so
+    // summing lane by lane after the packet gives the very sums, bit for bit, of the paths traced
+    // one after another).
     bool lockstep() const { return lockstep_; }
     // A read-only hook for tests that judge paths independently (tests/trace_stress.cpp): one path
     // from `origin`, which the caller says lies in `medium` (the tracer does not look it up), with
@@ -239,9 +241,19 @@ private:
     template <bool Principal>
     bool interact(State& st, const Hit& h, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split) const;
     // The camera samples of sample_packet traced side by side, one segment of each live path at a
-    // time, each segment's triangle candidates from one packet query (lockstep()).
+    // time (lockstep(); trace/Lockstep.cpp).
     void sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                          std::vector<PathResult>& out, size_t* ends) const;
+    // Its two steps over the lanes ids[0 .. m): the next interface of each (analytic: the object's
+    // patches in SIMD lanes, scalar propagate for the lanes they cannot decide), and the
+    // interaction at it (SIMD Fresnel, Snell and spawn; scalar interact for the uncommon ones).
+    // live[i] turns false where a path ends.
+    void lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h, PathStats* stats) const;
+    void lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats, bool* live) const;
+    // Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
+    // test each) instead of querying Embree's BVH, whose call overhead is larger (measured, not a
+    // tolerance).
+    static constexpr size_t kLinearScanLimit = 16;
     // sample_paths with the first segment's hit found already (or nullptr).
     void sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
                            std::vector<PathResult>& out, const Hit* first) const;
@@ -307,6 +319,7 @@ private:
     bool convex_ = false;  // the object is a convex body (Lens::is_convex)
     bool packets_ = false;  // sample_packet traces first segments in packets
     bool lockstep_ = false;  // ... and whole paths side by side (lockstep())
+    bool analytic_lanes_ = false;  // analytic lockstep: every object patch has SIMD twins (trace/Lanes.h)
 };
 
 }  // namespace ltm

@@ -1,0 +1,246 @@
+// A pixel's camera samples traced side by side (Tracer::lockstep): one lane per sample, every
+// live path's next segment found together, every interaction computed together.
+//
+// Rays of one pixel start side by side, nearly parallel, and stay so through the object (most of
+// them are transmitted at every interface), so
+//  - the mesh representations find each segment's triangle candidates in one coherent packet
+//    query (EmbreeScene::intersect_packet skips each ray's own triangle as the single query
+//    does; refined_hit checks the ellipsoids the packet does not see), and
+//  - the analytic representation solves the object's patches for all lanes at once in SIMD
+//    (trace/Lanes.h), as do the interactions of every representation: Fresnel, Snell's law and
+//    the spawn of the next ray.
+// Tracing them side by side changes nothing any path computes. Each lane's arithmetic is the
+// scalar tracer's, operation for operation (Lanes.h says how); a lane the SIMD step does not
+// cover (an ellipsoid near the segment, a rim hit, a miss inside the glass, total absorption,
+// Russian roulette, anything not finite) takes the scalar step (propagate, interact) for that
+// segment or interaction. Each path draws from its own stream (rngs[i]) in its own order, and
+// counts into its own PathStats; those are summed after the packet in sample order: their integers
+// in any order, and their weight sums exactly as one path after another adds to them, since each
+// path adds to each at most once (lockstep() holds only without absorption in the glass, whose
+// Beer-Lambert share is added on every segment). tests/trace_packets.cpp compares every branch and
+// counter with the paths traced one at a time, bit for bit; tests/trace_lanes.cpp every SIMD twin
+// with its scalar function.
+#include "trace/LaneKernels.h"
+#include "trace/Optics.h"
+#include "trace/TraceTolerance.h"
+#include "trace/Tracer.h"
+#include "trace/TracerState.h"
+
+namespace ltm {
+
+static_assert(lanes::kRays == Tracer::kPacket);
+
+
+void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h, PathStats* stats) const {
+    lanes::ObjectLanes obj;
+    obj.patches = object_patches_.data();
+    obj.count = static_cast<int>(object_patches_.size());
+    for (int k = 0; k < obj.count; ++k) {
+        const SurfaceInfo& s = solid_.surfaces[object_patches_[static_cast<size_t>(k)].tag];
+        obj.surfaces[k] = &s.surface;
+        obj.normal_sign[k] = s.normal_sign;
+    }
+    obj.ellipsoids = user_patches_.data();
+    obj.ellipsoid_count = static_cast<int>(user_patches_.size());
+    const lanes::Kernels& kernels = lanes::kernels();
+    lanes::SegmentLanes s;
+    const int count = kernels.count(m);
+    for (int j = 0; j < count; ++j) {  // lanes past m repeat the first: finite, ignored
+        const State& a = st[ids[j < m ? j : 0]];
+        s.o.set(j, a.o);
+        s.d.set(j, a.d);
+    }
+    kernels.analytic_segments(obj, s, count);
+    for (int j = 0; j < m; ++j) {
+        const int i = ids[j];
+        // A miss inside the glass is a leak for repair_medium to judge; the rest of the scalar's.
+        if (s.scalar[j] || (s.which[j] < 0 && st[i].medium != Medium::Air)) {
+            h[i] = propagate(st[i], stats[i]);
+            continue;
+        }
+        // straight_step's record of analytic_hit's answer.
+        Hit& r = h[i];
+        r = Hit{};
+        if (s.which[j] >= 0) {
+            r.found = true;
+            r.t = s.t[j];
+            r.tag = object_patches_[static_cast<size_t>(s.which[j])].tag;
+            r.p = s.p.get(j);
+            r.n_out = s.n_out.get(j);
+            r.offset = s.offset[j];
+        }
+        r.d_in = st[i].d;
+        r.length = r.t;
+        r.n_from = (*media_)[st[i].medium].index;
+    }
+}
+
+void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats,
+                            bool* live) const {
+    // Lanes the SIMD halves take: an optical interface between straight media, a finite hit, no
+    // roulette yet. The rest interact alone, before anything of theirs changes here.
+    const SurfaceTable& table = solid_.surfaces;
+    int lane_of[lanes::kRays];  // lanes of the kernels: ids[k] for k = lane_of[j]
+    Medium to[lanes::kRays];
+    bool entering[lanes::kRays];
+    int n = 0;
+    for (int j = 0; j < m; ++j) {
+        const int i = ids[j];
+        const Hit& hh = h[i];
+        const State& s = st[i];
+        bool simple = hh.found && !hh.repaired && !hh.lost && s.depth + 1 < options_.rr_depth && is_finite(hh.p) &&
+                      is_finite(hh.n_out) && is_finite(hh.d_in) && std::isfinite(hh.n_from);
+        if (simple) {
+            const SurfaceInfo& sf = table[hh.tag];
+            const bool in = dot(hh.d_in, hh.n_out) < 0;
+            Medium t = in ? sf.inside : sf.outside;
+            if (t == Medium::Glass && sf.defect < 0)  // as interact: a face where an inclusion reaches it
+                for (int k : face_inclusions_)
+                    if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(hh.p, hh.p) < 1.0) t = Medium::inclusion(k);
+            simple = sf.optical && t != Medium::Absorber &&
+                     !(sf.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) &&
+                     (*media_)[t].propagation == Propagation::Straight;
+            entering[n] = in;
+            to[n] = t;
+        }
+        if (!simple) {
+            live[i] = interact<false>(st[i], hh, &rngs[i], stats[i], nullptr, nullptr);
+            continue;
+        }
+        lane_of[n++] = j;
+    }
+    if (n == 0) return;
+
+    const lanes::Kernels& kernels = lanes::kernels();
+    lanes::InteractLanes a;
+    const bool mesh_only = options_.representation == Representation::MeshOnly;
+    const int count = kernels.count(n);
+    for (int j = 0; j < count; ++j) {  // lanes past n repeat the first: finite, ignored
+        const int k = j < n ? j : 0;
+        const Hit& hh = h[ids[lane_of[k]]];
+        a.d_in.set(j, hh.d_in);
+        a.n_out.set(j, hh.n_out);
+        a.p.set(j, hh.p);
+        a.offset[j] = hh.offset;
+        a.eta[j] = hh.n_from / (*media_)[to[k]].index;  // index_at of a straight medium
+        a.entering[j] = entering[k] ? -1 : 0;
+        a.skip_chord[j] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
+    }
+    kernels.fresnel(a, count);
+    // The Fresnel choice, drawn from each path's own stream as interact draws it.
+    for (int j = 0; j < n; ++j) {
+        const int i = ids[lane_of[j]];
+        bool r = true;
+        if (a.tir[j]) {
+            ++stats[i].tir;
+        } else {
+            r = rngs[i].uniform() < a.reflectance[j];
+            ++st[i].random_choices;
+        }
+        a.reflect[j] = r ? -1 : 0;
+    }
+    for (int j = n; j < count; ++j) a.reflect[j] = a.reflect[0];
+    kernels.spawn(a, count, trace_tol::kSkipFloatUlps * trace_tol::kFloatUlp * scale_);
+    for (int j = 0; j < n; ++j) {
+        const int i = ids[lane_of[j]];
+        const Hit& hh = h[i];
+        State& s = st[i];
+        PathStats& ps = stats[i];
+        const SurfaceInfo& sf = table[hh.tag];
+        ++ps.segments;
+        if (s.defect < 0) {  // as interact
+            const int k = s.medium.defect();
+            if (k >= 0 && scene_.defects[static_cast<size_t>(k)].segment_min_rho2(s.o, hh.p) < 1.0) s.defect = k;
+            else if (sf.defect >= 0) s.defect = sf.defect;
+        }
+        if (a.reflect[j]) {
+            if (!a.tir[j]) ++ps.reflections;
+        } else {
+            const Medium from = entering[j] ? sf.outside : sf.inside;
+            s.escaped = convex_ && !mesh_only && sf.defect < 0 && from == Medium::Glass && to[j] == Medium::Air;
+            s.medium = to[j];
+            ++ps.transmissions;
+        }
+        if (!a.finite[j]) {  // spawn's check
+            ++ps.nan_events;
+            s.weight = 0;
+            live[i] = false;
+            continue;
+        }
+        s.o = a.o.get(j);
+        s.d = a.d.get(j);
+        s.skip = hh.triangle;
+        s.skip_prim = hh.prim;
+        if (hh.triangle) s.skip_until = a.skip_until[j];
+        live[i] = true;
+    }
+}
+
+void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                             std::vector<PathResult>& out, size_t* ends) const {
+    const bool analytic = options_.representation == Representation::Analytic;
+    State st[kPacket];
+    PathStats lane[kPacket];
+    Hit h[kPacket];
+    bool live[kPacket];
+    if (!analytic) packet_hits(n, origins, directions, h, lane, 1);
+    int ids[kPacket];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        st[i].o = origins[i];
+        st[i].d = directions[i];
+        st[i].medium = Medium::Air;
+        ++lane[i].paths;
+        live[i] = begin_segment(st[i], lane[i], nullptr);
+        if (live[i]) ids[m++] = i;
+    }
+    if (analytic && m > 0) lanes_analytic_hits(m, ids, st, h, lane);
+    while (m > 0) {
+        lanes_interact(m, ids, st, h, rngs, lane, live);
+        // The next segment of every path still live: out of a convex object nothing is queried.
+        int q = 0, next = 0;
+        int query[kPacket];
+        for (int j = 0; j < m; ++j) {
+            const int i = ids[j];
+            if (!live[i]) continue;
+            ++st[i].depth;
+            if (!begin_segment(st[i], lane[i], nullptr)) {
+                live[i] = false;
+                continue;
+            }
+            ids[next++] = i;
+            if (st[i].escaped)
+                h[i] = propagate(st[i], lane[i]);
+            else
+                query[q++] = i;
+        }
+        m = next;
+        if (q == 0) continue;
+        if (q < kMinLockstep) {
+            for (int j = 0; j < q; ++j) h[query[j]] = propagate(st[query[j]], lane[query[j]]);
+        } else if (analytic) {
+            lanes_analytic_hits(q, query, st, h, lane);
+        } else {
+            Vec3 o[kPacket], d[kPacket];
+            EmbreeScene::PacketSkip skip;
+            Candidate c[kPacket];
+            for (int j = 0; j < q; ++j) {
+                const State& s = st[query[j]];
+                o[j] = s.o;
+                d[j] = s.d;
+                skip.prim[j] = s.skip_prim;
+                skip.on[j] = s.skip;
+                skip.until[j] = s.skip_until;
+            }
+            embree_->intersect_packet(o, d, q, c, &skip);
+            for (int j = 0; j < q; ++j) h[query[j]] = propagate(st[query[j]], lane[query[j]], &c[j]);
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        out.push_back(branch_result(st[i], lane[i]));
+        ends[i] = out.size();
+        stats.merge(lane[i]);
+    }
+}
+
+}  // namespace ltm
