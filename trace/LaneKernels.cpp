@@ -118,6 +118,62 @@ void analytic_segments(const ObjectLanes& obj, SegmentLanes& s, int count) {
 }
 
 
+// Tracer::refined_hit's first attempt for the lanes [at, at + kLanes) (RefineLanes).
+LTM_LANE void refine_chunk(const ObjectLanes& obj, RefineLanes& r, int at, double origin_floor) {
+    const V3 o = load(r.o, at), d = load(r.d, at);
+    const Real ct = load(r.candidate_t + at);
+    const Mask cap = load(r.patch + at);
+    // omag = std::max({|o.x|, |o.y|, |o.z|, floor}): the first largest, by <.
+    const Real omag = max(max(max(abs(o.x), abs(o.y)), abs(o.z)), splat(origin_floor));
+    const Real cosf = abs(dot(d, load(r.face_normal, at)));
+    const Real window = splat(2.0) * load(r.chord + at) / max(cosf, splat(trace_tol::kCandidateMinCos)) +
+                        splat(trace_tol::kCandidateFloatUlps * trace_tol::kFloatUlp) * (omag + ct);
+    // te = patch_hit(cap, o, d, 0, ct + window): the cap's first root, where it is below the bound.
+    const Real inf = splat(INFINITY);
+    const Real reach = ct + window;
+    Real te = inf;
+    for (int k = 0; k < obj.count; ++k) {
+        const Mask mine = cap == splat_int(k);
+        if (!any(mine)) continue;
+        const Real root = patch_root(obj.patches[k], o, d);
+        te = select(mine & (root < reach), root, te);
+    }
+    // Taken where the root is within the window (not before it: a guard hit; not beyond: a
+    // spurious facet); the cap is then solved over (0, te], exact_guard's solved_patch.
+    Mask ok = ~(te < ct - window) & (abs(te - ct) <= window);
+    // exact_guard(o, d, te, cap): the other patches' first roots below the nearest so far.
+    Real g = inf;
+    for (int k = 0; k < obj.count; ++k) {
+        const Mask guarded = ok & ~(cap == splat_int(k));
+        const Real limit = select(g < te, g, te);
+        if (!any(guarded & may_meet(obj.patches[k], o, d, limit))) continue;
+        const Real root = patch_root(obj.patches[k], o, d);
+        g = select(guarded & (root < limit), root, g);
+    }
+    ok &= ~(g < te);
+    const V3 p = o + d * te;
+    V3 n = {splat(0.0), splat(0.0), splat(0.0)};
+    Real offset = splat(0.0);
+    for (int k = 0; k < obj.count; ++k) {
+        const Mask won = ok & (cap == splat_int(k));
+        if (!any(won)) continue;
+        V3 nk;
+        Real offset_k;
+        cap_surface(*obj.surfaces[k], obj.normal_sign[k], p, nk, offset_k);
+        n = select(won, nk, n);
+        offset = select(won, offset_k, offset);
+    }
+    ok &= finite(p) & finite(n) & finite(offset);
+    store(r.t + at, te);
+    store(r.p, at, p);
+    store(r.n_out, at, n);
+    store(r.offset + at, offset);
+    store(r.scalar + at, ~ok);
+}
+void refine_segments(const ObjectLanes& obj, RefineLanes& r, int count, double origin_floor) {
+    for (int at = 0; at < count; at += kLanes) refine_chunk(obj, r, at, origin_floor);
+}
+
 // nf (the normal on the incident side), cos_i, fresnel, reflect and refract.
 void fresnel_lanes(InteractLanes& a, int count) {
     for (int at = 0; at < count; at += kLanes) {
@@ -163,12 +219,12 @@ void spawn_lanes(InteractLanes& a, int count, double skip_floor) {
 
 #if defined(__AVX512F__)
 const Kernels* kernels_x86_64_v4() {
-    static const Kernels k{"x86-64-v4", kLanes, analytic_segments, fresnel_lanes, spawn_lanes};
+    static const Kernels k{"x86-64-v4", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes};
     return &k;
 }
 #elif defined(__AVX2__)
 const Kernels* kernels_x86_64_v3() {
-    static const Kernels k{"x86-64-v3", kLanes, analytic_segments, fresnel_lanes, spawn_lanes};
+    static const Kernels k{"x86-64-v3", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes};
     return &k;
 }
 #else
@@ -179,7 +235,7 @@ const Kernels* kernels_x86_64_v3();
 #endif
 
 std::vector<const Kernels*> runnable_kernels() {
-    static const Kernels baseline{"baseline", kLanes, analytic_segments, fresnel_lanes, spawn_lanes};
+    static const Kernels baseline{"baseline", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes};
     std::vector<const Kernels*> out;
 #if defined(LTM_LANE_KERNELS_X86)
     // The features the AVX-512 and AVX2 builds are compiled with (CMakeLists.txt).

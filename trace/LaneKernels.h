@@ -79,11 +79,30 @@ struct InteractLanes {
     alignas(64) std::int64_t finite[kRays];     // ... set where the new direction is finite
 };
 
+// Tracer::refined_hit's first attempt where the packet's candidate is a facet of one of the
+// object's caps: the cap's root within the candidate's window, the exact guard over the other
+// patches (no cutting defect in the scene) finding nothing nearer, and on_surface. A lane where
+// anything else happens (a root outside the window, a guard hit, a non-finite result) is the
+// scalar's.
+struct RefineLanes {
+    Vec3s o, d;                               // in: the rays
+    Vec3s face_normal;                        // ... the candidate facet's normal
+    alignas(64) double candidate_t[kRays];    // ... its distance (Embree's float)
+    alignas(64) std::int64_t patch[kRays];    // ... its cap (index into ObjectLanes::patches)
+    alignas(64) double chord[kRays];          // ... the chord error of its tag
+    alignas(64) double t[kRays];              // out: the exact root
+    Vec3s p, n_out;                           // ... the hit point, its outward normal
+    alignas(64) double offset[kRays];         // ... and its spawn offset
+    alignas(64) std::int64_t scalar[kRays];   // set: the lane needs Tracer::refined_hit itself
+};
+
 // One instruction set's kernels.
 struct Kernels {
     const char* isa;  // "x86-64-v4" (AVX-512), "x86-64-v3" (AVX2), "baseline"
     int lanes;        // doubles per vector
     void (*analytic_segments)(const ObjectLanes& obj, SegmentLanes& s, int count);
+    // origin_floor: kOriginFloor times the scene's scale (the tracer's omag floor).
+    void (*refine_segments)(const ObjectLanes& obj, RefineLanes& r, int count, double origin_floor);
     // nf (the normal on the incident side), cos_i, fresnel, reflect and refract.
     void (*fresnel)(InteractLanes& a, int count);
     // The chosen direction normalized and the new ray spawned (Tracer::interact's spawn).

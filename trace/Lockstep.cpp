@@ -30,18 +30,28 @@ namespace ltm {
 
 static_assert(lanes::kRays == Tracer::kPacket);
 
+namespace {
 
-void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h, PathStats* stats) const {
+// What the kernels read of the object (the tracer's own patches and surface table).
+lanes::ObjectLanes object_lanes(const std::vector<Patch>& patches, const SurfaceTable& table,
+                                const std::vector<Patch>& ellipsoids) {
     lanes::ObjectLanes obj;
-    obj.patches = object_patches_.data();
-    obj.count = static_cast<int>(object_patches_.size());
+    obj.patches = patches.data();
+    obj.count = static_cast<int>(patches.size());
     for (int k = 0; k < obj.count; ++k) {
-        const SurfaceInfo& s = solid_.surfaces[object_patches_[static_cast<size_t>(k)].tag];
+        const SurfaceInfo& s = table[patches[static_cast<size_t>(k)].tag];
         obj.surfaces[k] = &s.surface;
         obj.normal_sign[k] = s.normal_sign;
     }
-    obj.ellipsoids = user_patches_.data();
-    obj.ellipsoid_count = static_cast<int>(user_patches_.size());
+    obj.ellipsoids = ellipsoids.data();
+    obj.ellipsoid_count = static_cast<int>(ellipsoids.size());
+    return obj;
+}
+
+}  // namespace
+
+void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h, PathStats* stats) const {
+    const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, user_patches_);
     const lanes::Kernels& kernels = lanes::kernels();
     lanes::SegmentLanes s;
     const int count = kernels.count(m);
@@ -72,6 +82,74 @@ void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h,
         r.d_in = st[i].d;
         r.length = r.t;
         r.n_from = (*media_)[st[i].medium].index;
+    }
+}
+
+void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h,
+                                PathStats* stats) const {
+    // The lanes whose packet candidate is a facet of a cap and the single query's answer
+    // (packet_answers); the rest take refined_hit with their candidate as it is.
+    const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, {});
+    const lanes::Kernels& kernels = lanes::kernels();
+    lanes::RefineLanes r;
+    int lane_of[lanes::kRays];
+    int n = 0;
+    for (int j = 0; j < m; ++j) {
+        const int i = ids[j];
+        const Candidate& cj = c[j];
+        if (!(cj.hit && !cj.analytic && cj.tag >= 0 && cj.tag < static_cast<int>(object_patches_.size()) &&
+              object_patches_[static_cast<size_t>(cj.tag)].kind == Patch::Kind::Cap && packet_answers(cj, st[i].o, st[i].d))) {
+            h[i] = propagate(st[i], stats[i], &cj);
+            continue;
+        }
+        lane_of[n] = j;
+        r.o.set(n, st[i].o);
+        r.d.set(n, st[i].d);
+        r.face_normal.set(n, face_normals_[cj.prim]);
+        r.candidate_t[n] = cj.t;
+        r.patch[n] = cj.tag;
+        r.chord[n] = solid_.tag_chord_error[static_cast<size_t>(cj.tag)];
+        ++n;
+    }
+    if (n == 0) return;
+    const int count = kernels.count(n);
+    for (int j = n; j < count; ++j) {  // lanes past n repeat the first: finite, ignored
+        r.o.set(j, r.o.get(0));
+        r.d.set(j, r.d.get(0));
+        r.face_normal.set(j, r.face_normal.get(0));
+        r.candidate_t[j] = r.candidate_t[0];
+        r.patch[j] = r.patch[0];
+        r.chord[j] = r.chord[0];
+    }
+    kernels.refine_segments(obj, r, count, trace_tol::kOriginFloor * scale_);
+    for (int k = 0; k < n; ++k) {
+        const int j = lane_of[k];
+        const int i = ids[j];
+        const Candidate& cj = c[j];
+        const SurfaceInfo& sf = solid_.surfaces[cj.tag];
+        // refined_hit's check of the medium it is approached from; a wrong one retries there.
+        const Vec3 n_out = r.n_out.get(k);
+        const Medium from = dot(st[i].d, n_out) < 0 ? sf.outside : sf.inside;
+        if (r.scalar[k] || from != st[i].medium) {
+            h[i] = propagate(st[i], stats[i], &cj);
+            continue;
+        }
+        ++stats[i].packet_segments;
+        // straight_step's record of refined_hit's answer.
+        Hit& hh = h[i];
+        hh = Hit{};
+        hh.found = true;
+        hh.t = r.t[k];
+        hh.tag = cj.tag;
+        hh.prim = cj.prim;
+        hh.triangle = true;
+        hh.solved_patch = cj.tag;
+        hh.p = r.p.get(k);
+        hh.n_out = n_out;
+        hh.offset = r.offset[k];
+        hh.d_in = st[i].d;
+        hh.length = hh.t;
+        hh.n_from = (*media_)[st[i].medium].index;
     }
 }
 
@@ -183,7 +261,7 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
     PathStats lane[kPacket];
     Hit h[kPacket];
     bool live[kPacket];
-    if (!analytic) packet_hits(n, origins, directions, h, lane, 1);
+    if (!analytic && !refined_lanes_) packet_hits(n, origins, directions, h, lane, 1);
     int ids[kPacket];
     int m = 0;
     for (int i = 0; i < n; ++i) {
@@ -195,6 +273,16 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
         if (live[i]) ids[m++] = i;
     }
     if (analytic && m > 0) lanes_analytic_hits(m, ids, st, h, lane);
+    if (refined_lanes_ && m > 0) {  // the camera rays' packet (nothing to skip), refined in lanes
+        Vec3 o[kPacket], d[kPacket];
+        Candidate c[kPacket];
+        for (int j = 0; j < m; ++j) {
+            o[j] = st[ids[j]].o;
+            d[j] = st[ids[j]].d;
+        }
+        embree_->intersect_packet(o, d, m, c);
+        lanes_refined_hits(m, ids, st, c, h, lane);
+    }
     while (m > 0) {
         lanes_interact(m, ids, st, h, rngs, lane, live);
         // The next segment of every path still live: out of a convex object nothing is queried.
@@ -233,7 +321,10 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
                 skip.until[j] = s.skip_until;
             }
             embree_->intersect_packet(o, d, q, c, &skip);
-            for (int j = 0; j < q; ++j) h[query[j]] = propagate(st[query[j]], lane[query[j]], &c[j]);
+            if (refined_lanes_)
+                lanes_refined_hits(q, query, st, c, h, lane);
+            else
+                for (int j = 0; j < q; ++j) h[query[j]] = propagate(st[query[j]], lane[query[j]], &c[j]);
         }
     }
     for (int i = 0; i < n; ++i) {

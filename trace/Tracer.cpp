@@ -185,6 +185,8 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
     lockstep_ = (packets_ || analytic_lanes_) &&
                 (scene.tracing.estimator == Estimator::Sample || scene.tracing.split_depth == 0) &&
                 !media_->graded() && !(scene.object.absorption > 0);
+    refined_lanes_ = lockstep_ && options_.representation == Representation::Refined && cutters_.empty() &&
+                     std::all_of(object_patches_.begin(), object_patches_.end(), lanes::lane_patch);
     face_normals_.resize(tri_mesh_.num_triangles());
     for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
 }

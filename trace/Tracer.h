@@ -249,6 +249,9 @@ private:
     // interaction at it (SIMD Fresnel, Snell and spawn; scalar interact for the uncommon ones).
     // live[i] turns false where a path ends.
     void lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h, PathStats* stats) const;
+    // refined: the packet's candidates c[j] of the lanes ids[j], refined in SIMD lanes where they
+    // are facets of the object's caps (refined_lanes_), by refined_hit otherwise.
+    void lanes_refined_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h, PathStats* stats) const;
     void lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats, bool* live) const;
     // Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
     // test each) instead of querying Embree's BVH, whose call overhead is larger (measured, not a
@@ -320,6 +323,7 @@ private:
     bool packets_ = false;  // sample_packet traces first segments in packets
     bool lockstep_ = false;  // ... and whole paths side by side (lockstep())
     bool analytic_lanes_ = false;  // analytic lockstep: every object patch has SIMD twins (trace/Lanes.h)
+    bool refined_lanes_ = false;   // refined lockstep refines cap facets in SIMD (no cutting defect)
 };
 
 }  // namespace ltm
