@@ -44,6 +44,7 @@ namespace ltm::bench {
 struct StageTimes {
     double render = 0, camera = 0, intersection = 0, hit = 0, fresnel = 0, accumulate = 0, merge = 0, write = 0;
     std::uint64_t paths = 0, segments = 0, interactions = 0;
+    bool lockstep = false;  // the render traced paths side by side (Tracer::lockstep)
     double loop() const { return render - camera - intersection - hit - fresnel - accumulate - merge; }
 };
 
@@ -118,6 +119,7 @@ inline StageTimes stage_breakdown(const Tracer& tracer, const Tracer& mesh_only,
                                   long record_pixels = 400) {
     using namespace detail;
     StageTimes st;
+    st.lockstep = tracer.lockstep();
     RenderResult r;
     std::vector<double> renders, merges;
     for (int i = 0; i < reps; ++i) {
@@ -234,6 +236,9 @@ inline void print_stage_breakdown(const char* repr, const StageTimes& s) {
                                                    {"loop", s.loop()}};
     for (const auto& [name, sec] : rows) std::printf("  %-14s %8.1f ns %6.1f %%\n", name, ns(sec), pc(sec));
     std::printf("  %-14s %8.1f ns %6.1f %% of the render (not in it)\n", "write", ns(s.write), pc(s.write));
+    if (s.lockstep)
+        std::printf("  (lockstep render: hit and fresnel+rng replay the scalar steps, which the render does\n"
+                    "   mostly in SIMD lanes, so they overstate those stages and loop may be negative)\n");
 }
 
 }  // namespace ltm::bench
