@@ -280,7 +280,8 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
                 in.n_out.set(j, n);
                 in.p.set(j, o);
                 in.offset[j] = std::fabs(u(g)) * 1e-12;
-                in.eta[j] = j % 2 ? 1.0 / 1.5 : 1.72;
+                in.n_from[j] = j % 2 ? 1.0 : 1.5168;
+                in.n_to[j] = j % 2 ? 1.5168 : 1.0;
                 in.entering[j] = dot(d, n) < 0 ? -1 : 0;
                 in.skip_chord[j] = std::fabs(u(g)) * 1e-3;
                 in.reflect[j] = u(g) < 0 ? -1 : 0;

@@ -174,12 +174,13 @@ void refine_segments(const ObjectLanes& obj, RefineLanes& r, int count, double o
     for (int at = 0; at < count; at += kLanes) refine_chunk(obj, r, at, origin_floor);
 }
 
-// nf (the normal on the incident side), cos_i, fresnel, reflect and refract.
+// nf (the normal on the incident side), eta = n_from / n_to (interact's division), cos_i, fresnel,
+// reflect and refract.
 void fresnel_lanes(InteractLanes& a, int count) {
     for (int at = 0; at < count; at += kLanes) {
         const V3 d = load(a.d_in, at), n_out = load(a.n_out, at);
         const V3 nf = select(load(a.entering + at), n_out, -n_out);
-        const Real eta = load(a.eta + at);
+        const Real eta = load(a.n_from + at) / load(a.n_to + at);
         const Real cos_i = -dot(d, nf);
         const Fresnel F = fresnel(cos_i, eta);
         store(a.reflectance + at, F.reflectance);

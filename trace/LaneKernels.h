@@ -67,7 +67,8 @@ struct SegmentLanes {
 struct InteractLanes {
     Vec3s d_in, n_out, p;                       // in: the hit (Tracer::Hit)
     alignas(64) double offset[kRays];
-    alignas(64) double eta[kRays];              // ... n_from / n_to
+    alignas(64) double n_from[kRays];           // ... the index before the interface
+    alignas(64) double n_to[kRays];             // ... and after it (eta = n_from / n_to)
     alignas(64) std::int64_t entering[kRays];   // ... dot(d_in, n_out) < 0
     alignas(64) double skip_chord[kRays];       // ... the chord error the skip band allows for
     alignas(64) double reflectance[kRays];      // fresnel_lanes: R (1 under TIR)

@@ -200,7 +200,8 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         a.n_out.set(j, hh.n_out);
         a.p.set(j, hh.p);
         a.offset[j] = hh.offset;
-        a.eta[j] = hh.n_from / (*media_)[to[k]].index;  // index_at of a straight medium
+        a.n_from[j] = hh.n_from;
+        a.n_to[j] = (*media_)[to[k]].index;  // index_at of a straight medium
         a.entering[j] = entering[k] ? -1 : 0;
         a.skip_chord[j] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
     }
