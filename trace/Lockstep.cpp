@@ -89,7 +89,7 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
                                 PathStats* stats) const {
     // The lanes whose packet candidate is a facet of a cap and the single query's answer
     // (packet_answers); the rest take refined_hit with their candidate as it is.
-    const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, {});
+    const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, user_patches_);  // ellipsoids unread here
     const lanes::Kernels& kernels = lanes::kernels();
     lanes::RefineLanes r;
     int lane_of[lanes::kRays];
