@@ -11,16 +11,19 @@
 // byte-identical outputs of the lockstep tracer (tests/trace_packets.cpp) rely on.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "geometry/Lens.h"
+#include "trace/Camera.h"
 #include "trace/LaneKernels.h"
 #include "trace/Lanes.h"
 #include "trace/Optics.h"
 #include "trace/Patch.h"
+#include "trace/Rng.h"
 
 using namespace ltm;
 using lanes::kLanes;
@@ -321,4 +324,93 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
     }
     EXPECT_GT(refined_lanes, 0);
     EXPECT_GT(refined_scalar, 0);
+}
+
+// The camera's streams in lanes (lanes::seed_streams, lanes::uniform in the camera_draws kernel)
+// against Rng itself: for every sample, the stream after Rng(seed, k, s)'s first four uniforms,
+// on every instruction set, for seeds and pixels at the ends of their ranges (the hash of
+// k + kStreamA wraps) and for samples past 2^32; and both camera kernels of every set giving the
+// baseline's bits (the rays against TelecentricCamera::sample: the next test).
+TEST(Lanes, CameraStreamsAreRngsStreams) {
+    const std::uint64_t seeds[] = {0, 1, 42, 0xffffffffffffffffull};
+    const std::uint64_t pixels[] = {0, 7, 99999, 0xffffffffffffffffull - 3};
+    const std::uint64_t firsts[] = {0, 16, 4096, (1ull << 32) - 5};
+    const std::vector<const lanes::Kernels*> sets = lanes::runnable_kernels();
+    std::mt19937_64 g(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (std::uint64_t seed : seeds)
+        for (std::uint64_t pixel : pixels)
+            for (std::uint64_t first : firsts) {
+                lanes::CameraLanes in{};
+                in.key = splitmix64(seed) ^ splitmix64(pixel + Rng::kStreamA);
+                in.strata = 1 + std::floor(u(g) * 40);
+                in.column = std::floor(u(g) * 1000);
+                in.row = std::floor(u(g) * 1000);
+                in.width = 1 + u(g) * 50;
+                in.height = 1 + u(g) * 50;
+                in.half_width = -0.5 * in.width;
+                in.half_height = 0.5 * in.height;
+                in.columns = 1000;
+                in.rows = 1000;
+                in.na = u(g);
+                in.focus_z = u(g) * 10 - 5;
+                in.depth = u(g) * 20;
+                for (int j = 0; j < lanes::kRays; ++j) {
+                    in.sample[j] = first + static_cast<std::uint64_t>(j);
+                    in.stratum_x[j] = std::floor(u(g) * in.strata);
+                    in.stratum_y[j] = std::floor(u(g) * in.strata);
+                    // The caller's cosine and sine, any finite values for this comparison.
+                    in.cos_phi[j] = u(g) * 2 - 1;
+                    in.sin_phi[j] = u(g) * 2 - 1;
+                }
+                lanes::CameraLanes want = in;
+                sets.back()->camera_draws(want, lanes::kRays);
+                sets.back()->camera_rays(want, lanes::kRays);
+                for (int j = 0; j < lanes::kRays; ++j) {
+                    Rng rng(seed, pixel, first + static_cast<std::uint64_t>(j));
+                    for (int i = 0; i < 4; ++i) rng.uniform();
+                    Rng got = Rng::from_state(want.state[j], want.inc[j]);
+                    for (int i = 0; i < 8; ++i) ASSERT_EQ(got.next_u32(), rng.next_u32()) << "lane " << j;
+                }
+                for (const lanes::Kernels* k : sets) {
+                    lanes::CameraLanes got = in;
+                    k->camera_draws(got, lanes::kRays);
+                    k->camera_rays(got, lanes::kRays);
+                    ASSERT_EQ(std::memcmp(&got, &want, sizeof got), 0) << k->isa;
+                }
+            }
+}
+
+// TelecentricCamera::sample_packet against sample one at a time: the same origins and directions,
+// bit for bit, and the same streams after them, for a jittered grid (spp a square) and for Latin
+// hypercube strata, for packets of every size from 1 to 16 at any first sample.
+TEST(Lanes, CameraPacketsAreSamplesOneAtATime) {
+    for (int spp : {64, 20}) {
+        CameraDesc desc;
+        desc.resolution = {7, 5};
+        desc.size = {3.0, 2.0};
+        desc.numerical_aperture = 0.3;
+        desc.samples_per_pixel = spp;
+        const TelecentricCamera cam(desc, -10.0);
+        const std::uint64_t seed = 12345;
+        for (long k : {0L, 17L, 34L}) {
+            const std::vector<int> perm = cam.permutation(k, seed);
+            for (int n = 1; n <= 16; ++n)
+                for (int s0 = 0; s0 + n <= spp; s0 += 3) {
+                    Rng rng[16];
+                    Vec3 o[16], d[16];
+                    cam.sample_packet(k, s0, n, perm, seed, rng, o, d);
+                    for (int i = 0; i < n; ++i) {
+                        Rng want(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s0 + i));
+                        Vec3 wo, wd;
+                        cam.sample(k, s0 + i, perm, want, wo, wd);
+                        for (int c = 0; c < 3; ++c) {
+                            ASSERT_TRUE(same_bits(o[i][c], wo[c])) << "spp " << spp << " pixel " << k << " sample " << s0 + i;
+                            ASSERT_TRUE(same_bits(d[i][c], wd[c])) << "spp " << spp << " pixel " << k << " sample " << s0 + i;
+                        }
+                        ASSERT_EQ(rng[i].next_u32(), want.next_u32());
+                    }
+                }
+        }
+    }
 }

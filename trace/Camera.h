@@ -54,20 +54,31 @@ public:
 
     // Sample s of pixel k. Positions are stratified over the footprint: a jittered grid when spp
     // is a square, otherwise Latin-hypercube strata (x stratum s, y stratum from a per-pixel
-    // permutation `perm`). `rng` supplies the jitter and the direction.
+    // permutation `perm`). `rng` supplies the jitter and the direction: four draws, in order.
     void sample(long k, int s, const std::vector<int>& perm, Rng& rng, Vec3& origin, Vec3& dir) const {
+        double u[4];
+        for (double& x : u) x = rng.uniform();
+        sample_from(k, s, perm, u, origin, dir);
+    }
+    // Samples s0, ..., s0 + n - 1 of pixel k (n <= 16) with their streams: rng[i] is
+    // Rng(seed, k, s0 + i) after sample() took its draws, origin[i] and dir[i] what sample() gives,
+    // bit for bit. Computed in SIMD lanes, the azimuth's cosine and sine apart (trace/Camera.cpp).
+    void sample_packet(long k, int s0, int n, const std::vector<int>& perm, std::uint64_t seed, Rng* rng,
+                       Vec3* origin, Vec3* dir) const;
+    // Sample s from its four draws u (sample's arithmetic).
+    void sample_from(long k, int s, const std::vector<int>& perm, const double u[4], Vec3& origin, Vec3& dir) const {
         const long m = k / N_, n = k % N_;
         double fx, fy;
         if (grid_ > 0) {
-            fx = ((s % grid_) + rng.uniform()) / grid_;
-            fy = ((s / grid_) + rng.uniform()) / grid_;
+            fx = ((s % grid_) + u[0]) / grid_;
+            fy = ((s / grid_) + u[1]) / grid_;
         } else {
-            fx = (s + rng.uniform()) / spp_;
-            fy = (perm[static_cast<size_t>(s)] + rng.uniform()) / spp_;
+            fx = (s + u[0]) / spp_;
+            fy = (perm[static_cast<size_t>(s)] + u[1]) / spp_;
         }
         const double x = -0.5 * width_ + (n + fx) * width_ / N_;
         const double y = 0.5 * height_ - (m + fy) * height_ / M_;
-        const double r = na_ * std::sqrt(rng.uniform()), phi = 2.0 * kPi * rng.uniform();
+        const double r = na_ * std::sqrt(u[2]), phi = 2.0 * kPi * u[3];
         const double sx = r * std::cos(phi), sy = r * std::sin(phi);
         dir = {sx, sy, std::sqrt((1.0 - r) * (1.0 + r))};
         const Vec3 focus{x, y, focus_z_};

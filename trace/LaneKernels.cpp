@@ -34,6 +34,13 @@ LTM_LANE Mask splat_int(std::int64_t k) {
     return r;
 }
 
+LTM_LANE Bits load(const std::uint64_t* p) {
+    Bits r;
+    std::memcpy(&r, p, sizeof r);
+    return r;
+}
+LTM_LANE void store(std::uint64_t* p, const Bits& r) { std::memcpy(p, &r, sizeof r); }
+
 LTM_LANE V3 load(const Vec3s& v, int at) { return {load(v.x + at), load(v.y + at), load(v.z + at)}; }
 LTM_LANE void store(Vec3s& v, int at, const V3& a) {
     store(v.x + at, a.x);
@@ -216,16 +223,43 @@ void spawn_lanes(InteractLanes& a, int count, double skip_floor) {
 
 
 
+void camera_draws(CameraLanes& c, int count) {
+    for (int at = 0; at < count; at += kLanes) {
+        Streams r = seed_streams(c.key, load(c.sample + at));
+        const Real u0 = uniform(r), u1 = uniform(r), u2 = uniform(r), u3 = uniform(r);
+        store(c.state + at, r.state);
+        store(c.inc + at, r.inc);
+        // TelecentricCamera::sample_from, up to the azimuth's cosine and sine.
+        const Real strata = splat(c.strata);
+        const Real fx = (load(c.stratum_x + at) + u0) / strata, fy = (load(c.stratum_y + at) + u1) / strata;
+        store(c.x + at, splat(c.half_width) + (splat(c.column) + fx) * splat(c.width) / splat(c.columns));
+        store(c.y + at, splat(c.half_height) - (splat(c.row) + fy) * splat(c.height) / splat(c.rows));
+        store(c.r + at, splat(c.na) * sqrt(u2));
+        store(c.phi + at, splat(2.0 * kPi) * u3);
+    }
+}
+
+void camera_rays(CameraLanes& c, int count) {
+    for (int at = 0; at < count; at += kLanes) {
+        // The rest of TelecentricCamera::sample_from.
+        const Real r = load(c.r + at);
+        const V3 dir{r * load(c.cos_phi + at), r * load(c.sin_phi + at), sqrt((splat(1.0) - r) * (splat(1.0) + r))};
+        const V3 focus{load(c.x + at), load(c.y + at), splat(c.focus_z)};
+        store(c.origin, at, focus - dir * (splat(c.depth) / dir.z));
+        store(c.dir, at, dir);
+    }
+}
+
 }  // namespace LTM_LANE_ISA
 
 #if defined(__AVX512F__)
 const Kernels* kernels_x86_64_v4() {
-    static const Kernels k{"x86-64-v4", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes};
+    static const Kernels k{"x86-64-v4", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera_draws, camera_rays};
     return &k;
 }
 #elif defined(__AVX2__)
 const Kernels* kernels_x86_64_v3() {
-    static const Kernels k{"x86-64-v3", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes};
+    static const Kernels k{"x86-64-v3", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera_draws, camera_rays};
     return &k;
 }
 #else
@@ -236,7 +270,7 @@ const Kernels* kernels_x86_64_v3();
 #endif
 
 std::vector<const Kernels*> runnable_kernels() {
-    static const Kernels baseline{"baseline", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes};
+    static const Kernels baseline{"baseline", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera_draws, camera_rays};
     std::vector<const Kernels*> out;
 #if defined(LTM_LANE_KERNELS_X86)
     // The features the AVX-512 and AVX2 builds are compiled with (CMakeLists.txt).

@@ -28,6 +28,7 @@
 #include "geometry/Vec3.h"
 #include "trace/Optics.h"
 #include "trace/Patch.h"
+#include "trace/Rng.h"
 #include "trace/TraceTolerance.h"
 
 #if defined(__AVX512F__)
@@ -48,6 +49,8 @@ inline constexpr int kLanes = LTM_LANE_WIDTH;
 using Real = double __attribute__((vector_size(8 * kLanes)));
 // Comparisons give all bits set (true) or none (false) per lane; also the integer lanes.
 using Mask = std::int64_t __attribute__((vector_size(8 * kLanes)));
+// Unsigned 64-bit lanes: the random-number streams (wrapping arithmetic, logical shifts).
+using Bits = std::uint64_t __attribute__((vector_size(8 * kLanes)));
 
 #define LTM_LANE inline __attribute__((always_inline))
 
@@ -243,6 +246,49 @@ LTM_LANE Fresnel fresnel(const Real& cos_i_in, const Real& eta) {
 LTM_LANE V3 reflect(const V3& d, const V3& n) { return d - n * (splat(2.0) * dot(d, n)); }
 LTM_LANE V3 refract(const V3& d, const V3& n, const Real& eta, const Real& cos_i, const Real& cos_t) {
     return d * eta + n * (eta * cos_i - cos_t);
+}
+
+// ---- Random numbers (trace/Rng.h) -------------------------------------------------------------------
+// Integer twins: wrapping multiplication, shifts and xor give the scalar code's bits on any set.
+LTM_LANE Bits splat_bits(std::uint64_t x) {
+    Bits r;
+    for (int i = 0; i < kLanes; ++i) r[i] = x;
+    return r;
+}
+// splitmix64 per lane.
+LTM_LANE Bits splitmix64(Bits x) {
+    x += splat_bits(0x9e3779b97f4a7c15ull);
+    x = (x ^ (x >> 30)) * splat_bits(0xbf58476d1ce4e5b9ull);
+    x = (x ^ (x >> 27)) * splat_bits(0x94d049bb133111ebull);
+    return x ^ (x >> 31);
+}
+// PCG32 streams, one per lane: Rng's state and increment.
+struct Streams {
+    Bits state, inc;
+};
+// Rng(seed, a, b) per lane, given key = splitmix64(seed) ^ splitmix64(a + Rng::kStreamA) (the same
+// in every lane; xor is associative and commutative, so the hash of the three is unchanged).
+LTM_LANE Streams seed_streams(std::uint64_t key, const Bits& b) {
+    const Bits h = splitmix64(splat_bits(key) ^ splitmix64(b + splat_bits(Rng::kStreamB)));
+    const Bits inc = (splitmix64(h) << 1) | splat_bits(1);
+    // The constructor's two steps from state 0: 0 * M + inc, plus h, then one more step.
+    const Bits state = (inc + h) * splat_bits(Rng::kMultiplier) + inc;
+    return {state, inc};
+}
+// Rng::next_u32 per lane (the 32-bit result in the low half of each lane).
+LTM_LANE Bits next_u32(Streams& r) {
+    const Bits old = r.state;
+    r.state = old * splat_bits(Rng::kMultiplier) + r.inc;
+    const Bits low = splat_bits(0xffffffffull);
+    const Bits xorshifted = (((old >> 18) ^ old) >> 27) & low;
+    const Bits rot = old >> 59;
+    return ((xorshifted >> rot) | (xorshifted << ((splat_bits(32) - rot) & splat_bits(31)))) & low;
+}
+// Rng::uniform per lane: 53 bits, converted exactly (below 2^53) and scaled by 2^-53.
+LTM_LANE Real uniform(Streams& r) {
+    const Bits hi = next_u32(r), lo = next_u32(r);
+    const Mask bits = (Mask)(((hi << 32) | lo) >> 11);
+    return __builtin_convertvector(bits, Real) * splat(0x1.0p-53);
 }
 
 }  // namespace LTM_LANE_ISA

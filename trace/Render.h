@@ -25,6 +25,7 @@
 // task arena of its own with n threads; with 0 it runs in the caller's arena (all cores when the
 // caller is in none), so several renders can share one arena concurrently (the dataset command
 // renders several samples at once this way).
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
@@ -117,14 +118,17 @@ std::uint64_t render_seed(const Scene& scene, const RenderOptions& options);
 // The camera samples of pixel k exactly as render() draws them with `seed`: for s = 0 .. spp - 1,
 // f(s, rng, origin, direction) with rng = Rng(seed, k, s) just after the camera took the ray from
 // it, where the path's own draws begin (so a caller can trace the render's very paths again).
+// Sixteen samples at a time: their streams are seeded and drawn from in SIMD lanes.
 template <class F>
 void for_each_camera_sample(const TelecentricCamera& cam, std::uint64_t seed, long k, F&& f) {
     const std::vector<int> perm = cam.permutation(k, seed);
-    for (int s = 0; s < cam.samples_per_pixel(); ++s) {
-        Rng rng(seed, static_cast<std::uint64_t>(k), static_cast<std::uint64_t>(s));
-        Vec3 o, d;
-        cam.sample(k, s, perm, rng, o, d);
-        f(s, rng, o, d);
+    constexpr int kChunk = 16;  // TelecentricCamera::sample_packet's most
+    Rng rng[kChunk];
+    Vec3 o[kChunk], d[kChunk];
+    for (int s0 = 0; s0 < cam.samples_per_pixel(); s0 += kChunk) {
+        const int n = std::min(kChunk, cam.samples_per_pixel() - s0);
+        cam.sample_packet(k, s0, n, perm, seed, rng, o, d);
+        for (int i = 0; i < n; ++i) f(s0 + i, rng[i], o[i], d[i]);
     }
 }
 

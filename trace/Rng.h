@@ -23,18 +23,32 @@ inline std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t stream) {
 
 class Rng {
 public:
+    // PCG32's multiplier, and the constants that set streams a and b apart in the seeding.
+    static constexpr std::uint64_t kMultiplier = 6364136223846793005ull;
+    static constexpr std::uint64_t kStreamA = 0x632be59bd9b4e019ull, kStreamB = 0x8cb92ba72f3d8dd7ull;
+
     Rng(std::uint64_t seed, std::uint64_t stream_a, std::uint64_t stream_b = 0) {
-        const std::uint64_t h = splitmix64(splitmix64(seed) ^ splitmix64(stream_a + 0x632be59bd9b4e019ull) ^
-                                           splitmix64(stream_b + 0x8cb92ba72f3d8dd7ull));
+        const std::uint64_t h = splitmix64(splitmix64(seed) ^ splitmix64(stream_a + kStreamA) ^
+                                           splitmix64(stream_b + kStreamB));
         inc_ = (splitmix64(h) << 1u) | 1u;
         state_ = 0;
         next_u32();
         state_ += h;
         next_u32();
     }
+    // A placeholder stream (state 0, increment 1), to be assigned a real one.
+    Rng() = default;
+    // The stream whose next draw follows `state` (with increment `inc`, odd): where a SIMD twin of
+    // this class (trace/LaneKernels.h, camera_draws) left a stream it drew from.
+    static Rng from_state(std::uint64_t state, std::uint64_t inc) {
+        Rng r;
+        r.state_ = state;
+        r.inc_ = inc;
+        return r;
+    }
     std::uint32_t next_u32() {
         const std::uint64_t old = state_;
-        state_ = old * 6364136223846793005ull + inc_;
+        state_ = old * kMultiplier + inc_;
         const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
         const auto rot = static_cast<std::uint32_t>(old >> 59u);
         return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
