@@ -1,6 +1,7 @@
 #include "trace/Render.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -409,17 +410,9 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             }
         }
     };
-    if (opt.threads > 0) {
-        tbb::task_arena arena(opt.threads);
-        arena.execute(run_waves);
-    } else {
-        run_waves();
-    }
-    std::vector<BlockRows>().swap(wave);
-
-    const auto t_merge = std::chrono::steady_clock::now();
-    out.trace_seconds = std::chrono::duration<double>(t_merge - t0).count();
-    if (!pattern) {
+    std::chrono::steady_clock::time_point t_merge;
+    const auto assemble = [&] {
+        if (pattern) return;
         while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < K) indptr.push_back(indptr.back());
         out.nnz = total_nnz;
         if (out.streamed) {
@@ -429,10 +422,24 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             T.rows = K;
             T.cols = L;
             T.indptr = std::move(indptr);
-            held_indices.move_to(T.indices);
-            held_data.move_to(T.data);
+            // Column indices and values side by side: each copy is mostly first touches of fresh
+            // pages, which two threads take in half the time (a 64 spp paper render: 4.4 -> 2.5 ms).
+            tbb::parallel_invoke([&] { held_indices.move_to(T.indices); }, [&] { held_data.move_to(T.data); });
         }
+    };
+    const auto trace_and_assemble = [&] {
+        run_waves();
+        std::vector<BlockRows>().swap(wave);
+        t_merge = std::chrono::steady_clock::now();
+        assemble();
+    };
+    if (opt.threads > 0) {
+        tbb::task_arena arena(opt.threads);
+        arena.execute(trace_and_assemble);
+    } else {
+        trace_and_assemble();
     }
+    out.trace_seconds = std::chrono::duration<double>(t_merge - t0).count();
     const auto t_end = std::chrono::steady_clock::now();
     out.merge_seconds = std::chrono::duration<double>(t_end - t_merge).count();
     out.seconds = std::chrono::duration<double>(t_end - t0).count();
