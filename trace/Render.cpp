@@ -166,7 +166,8 @@ std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std:
         while (cap < 2 * entries.size()) cap <<= 1;
         std::int32_t slot[2 * kHashed];
         std::fill(slot, slot + cap, -1);
-        std::int32_t col[kHashed], order[kHashed];
+        std::int32_t col[kHashed];
+        std::uint64_t order[kHashed];
         double sum[kHashed];
         std::int32_t u = 0;
         for (const RowEntry& e : entries) {
@@ -176,16 +177,20 @@ std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std:
                 slot[h] = u;
                 col[u] = e.column;
                 sum[u] = 0.0;
-                order[u] = u;
+                // Sorted by column (a display pixel, >= 0), distinct: the key's high half decides.
+                order[u] = static_cast<std::uint64_t>(e.column) << 32 | static_cast<std::uint32_t>(u);
                 ++u;
             }
             sum[slot[h]] += e.weight;
         }
-        // Distinct keys: any sort gives the same order.
-        std::sort(order, order + u, [&](std::int32_t a, std::int32_t b) { return col[a] < col[b]; });
+        std::sort(order, order + u);
+        const size_t at = columns.size();
+        columns.resize(at + static_cast<size_t>(u));
+        values.resize(at + static_cast<size_t>(u));
         for (std::int32_t i = 0; i < u; ++i) {
-            columns.push_back(col[order[i]]);
-            values.push_back(static_cast<float>(sum[order[i]] / spp));
+            const auto k = static_cast<std::uint32_t>(order[i]);
+            columns[at + static_cast<size_t>(i)] = col[k];
+            values[at + static_cast<size_t>(i)] = static_cast<float>(sum[k] / spp);
         }
         return u;
     }
