@@ -156,18 +156,22 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
 void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats,
                             bool* live) const {
     // Lanes the SIMD halves take: an optical interface between straight media, a finite hit, no
-    // roulette yet. The rest interact alone, before anything of theirs changes here.
+    // roulette yet, packed into the kernels' lanes as they are found. The rest interact alone,
+    // before anything of theirs changes here.
     const SurfaceTable& table = solid_.surfaces;
+    const bool mesh_only = options_.representation == Representation::MeshOnly;
+    lanes::InteractLanes a;
     int lane_of[lanes::kRays];  // lanes of the kernels: ids[k] for k = lane_of[j]
     Medium to[lanes::kRays];
-    bool entering[lanes::kRays];
+    const SurfaceInfo* surface[lanes::kRays];
     int n = 0;
     for (int j = 0; j < m; ++j) {
         const int i = ids[j];
         const Hit& hh = h[i];
         const State& s = st[i];
-        bool simple = hh.found && !hh.repaired && !hh.lost && s.depth + 1 < options_.rr_depth && is_finite(hh.p) &&
-                      is_finite(hh.n_out) && is_finite(hh.d_in) && std::isfinite(hh.n_from);
+        // Not short-circuited: every test is cheap, a branch for each is not.
+        bool simple = hh.found & !hh.repaired & !hh.lost & (s.depth + 1 < options_.rr_depth);
+        simple = simple && (is_finite(hh.p) & is_finite(hh.n_out) & is_finite(hh.d_in) & std::isfinite(hh.n_from));
         if (simple) {
             const SurfaceInfo& sf = table[hh.tag];
             const bool in = dot(hh.d_in, hh.n_out) < 0;
@@ -175,35 +179,40 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
             if (t == Medium::Glass && sf.defect < 0)  // as interact: a face where an inclusion reaches it
                 for (int k : face_inclusions_)
                     if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(hh.p, hh.p) < 1.0) t = Medium::inclusion(k);
+            const MediumInfo& into = (*media_)[t];
             simple = sf.optical && t != Medium::Absorber &&
                      !(sf.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) &&
-                     (*media_)[t].propagation == Propagation::Straight;
-            entering[n] = in;
-            to[n] = t;
+                     into.propagation == Propagation::Straight;
+            if (simple) {
+                a.d_in.set(n, hh.d_in);
+                a.n_out.set(n, hh.n_out);
+                a.p.set(n, hh.p);
+                a.offset[n] = hh.offset;
+                a.n_from[n] = hh.n_from;
+                a.n_to[n] = into.index;  // index_at of a straight medium
+                a.entering[n] = in ? -1 : 0;
+                a.skip_chord[n] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
+                to[n] = t;
+                surface[n] = &sf;
+                lane_of[n++] = j;
+                continue;
+            }
         }
-        if (!simple) {
-            live[i] = interact<false>(st[i], hh, &rngs[i], stats[i], nullptr, nullptr);
-            continue;
-        }
-        lane_of[n++] = j;
+        live[i] = interact<false>(st[i], hh, &rngs[i], stats[i], nullptr, nullptr);
     }
     if (n == 0) return;
 
     const lanes::Kernels& kernels = lanes::kernels();
-    lanes::InteractLanes a;
-    const bool mesh_only = options_.representation == Representation::MeshOnly;
     const int count = kernels.count(n);
-    for (int j = 0; j < count; ++j) {  // lanes past n repeat the first: finite, ignored
-        const int k = j < n ? j : 0;
-        const Hit& hh = h[ids[lane_of[k]]];
-        a.d_in.set(j, hh.d_in);
-        a.n_out.set(j, hh.n_out);
-        a.p.set(j, hh.p);
-        a.offset[j] = hh.offset;
-        a.n_from[j] = hh.n_from;
-        a.n_to[j] = (*media_)[to[k]].index;  // index_at of a straight medium
-        a.entering[j] = entering[k] ? -1 : 0;
-        a.skip_chord[j] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
+    for (int j = n; j < count; ++j) {  // lanes past n repeat the first: finite, ignored
+        a.d_in.set(j, a.d_in.get(0));
+        a.n_out.set(j, a.n_out.get(0));
+        a.p.set(j, a.p.get(0));
+        a.offset[j] = a.offset[0];
+        a.n_from[j] = a.n_from[0];
+        a.n_to[j] = a.n_to[0];
+        a.entering[j] = a.entering[0];
+        a.skip_chord[j] = a.skip_chord[0];
     }
     kernels.fresnel(a, count);
     // The Fresnel choice, drawn from each path's own stream as interact draws it.
@@ -225,7 +234,7 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         const Hit& hh = h[i];
         State& s = st[i];
         PathStats& ps = stats[i];
-        const SurfaceInfo& sf = table[hh.tag];
+        const SurfaceInfo& sf = *surface[j];
         ++ps.segments;
         if (s.defect < 0) {  // as interact
             const int k = s.medium.defect();
@@ -235,7 +244,7 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         if (a.reflect[j]) {
             if (!a.tir[j]) ++ps.reflections;
         } else {
-            const Medium from = entering[j] ? sf.outside : sf.inside;
+            const Medium from = a.entering[j] ? sf.outside : sf.inside;
             s.escaped = convex_ && !mesh_only && sf.defect < 0 && from == Medium::Glass && to[j] == Medium::Air;
             s.medium = to[j];
             ++ps.transmissions;
@@ -294,6 +303,13 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
             if (!live[i]) continue;
             ++st[i].depth;
             if (!begin_segment(st[i], lane[i], nullptr)) {
+                live[i] = false;
+                continue;
+            }
+            if (st[i].escaped && (*media_)[st[i].medium].propagation == Propagation::Straight) {
+                // Out of a convex object: straight_hit finds nothing, and interact counts the
+                // segment and ends the path (branch_result looks for the display), as here.
+                ++lane[i].segments;
                 live[i] = false;
                 continue;
             }
