@@ -88,15 +88,27 @@ void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h,
 void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h,
                                 PathStats* stats) const {
     // The lanes whose packet candidate is a facet of a cap and the single query's answer
-    // (packet_answers); the rest take refined_hit with their candidate as it is.
-    const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, user_patches_);  // ellipsoids unread here
+    // (packet_answers), and the lanes in the air whose packet found nothing; the rest take
+    // refined_hit with their candidate as it is.
+    const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, user_patches_);
     const lanes::Kernels& kernels = lanes::kernels();
     lanes::RefineLanes r;
     int lane_of[lanes::kRays];
     int n = 0;
+    lanes::SegmentLanes miss;
+    int miss_of[lanes::kRays];
+    int misses = 0;
+    const bool straight_air = (*media_)[Medium::Air].propagation == Propagation::Straight;
     for (int j = 0; j < m; ++j) {
         const int i = ids[j];
         const Candidate& cj = c[j];
+        if (!cj.hit && st[i].medium == Medium::Air && straight_air) {
+            miss_of[misses] = j;
+            miss.o.set(misses, st[i].o);
+            miss.d.set(misses, st[i].d);
+            ++misses;
+            continue;
+        }
         if (!(cj.hit && !cj.analytic && cj.tag >= 0 && cj.tag < static_cast<int>(object_patches_.size()) &&
               object_patches_[static_cast<size_t>(cj.tag)].kind == Patch::Kind::Cap && packet_answers(cj, st[i].o, st[i].d))) {
             h[i] = propagate(st[i], stats[i], &cj);
@@ -110,6 +122,36 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
         r.patch[n] = cj.tag;
         r.chord[n] = solid_.tag_chord_error[static_cast<size_t>(cj.tag)];
         ++n;
+    }
+    if (misses > 0) {
+        // A ray in the air past every facet (a camera ray beside the lens, a ray reflected away):
+        // refined_hit takes the packet's answer where no ellipsoid lies near the ray
+        // (packet_answers over the whole ray), and then finds nothing where the exact guard, the
+        // object's patches solved over the whole ray, finds no root either. The analytic segment
+        // kernel computes both: the nearest root over the object's patches (exact_guard's loop
+        // with tmax = inf is analytic_hit's) and, where there is none, the ellipsoids' test over
+        // the whole ray (packet_answers'). Any other outcome is refined_hit's to judge.
+        const int count = kernels.count(misses);
+        for (int j = misses; j < count; ++j) {  // lanes past misses repeat the first: finite, ignored
+            miss.o.set(j, miss.o.get(0));
+            miss.d.set(j, miss.d.get(0));
+        }
+        kernels.analytic_segments(obj, miss, count);
+        for (int k = 0; k < misses; ++k) {
+            const int j = miss_of[k];
+            const int i = ids[j];
+            if (miss.scalar[k] || miss.which[k] >= 0) {
+                h[i] = propagate(st[i], stats[i], &c[j]);
+                continue;
+            }
+            ++stats[i].packet_segments;
+            // straight_step's record of refined_hit's answer: nothing ahead.
+            Hit& hh = h[i];
+            hh = Hit{};
+            hh.d_in = st[i].d;
+            hh.length = hh.t;
+            hh.n_from = (*media_)[st[i].medium].index;
+        }
     }
     if (n == 0) return;
     const int count = kernels.count(n);
