@@ -171,6 +171,10 @@ LTM_LANE void refine_chunk(const ObjectLanes& obj, RefineLanes& r, int at, doubl
         offset = select(won, offset_k, offset);
     }
     ok &= finite(p) & finite(n) & finite(offset);
+    // Tracer::packet_answers: no ellipsoid (which the packet does not see) near the segment up to
+    // the candidate, widened far beyond its float rounding.
+    const Real reach_e = ct * splat(1.0 + 1e-6);
+    for (int e = 0; e < obj.ellipsoid_count; ++e) ok &= ~segment_near(obj.ellipsoids[e], o, d, reach_e);
     store(r.t + at, te);
     store(r.p, at, p);
     store(r.n_out, at, n);

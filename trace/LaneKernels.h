@@ -81,9 +81,10 @@ struct InteractLanes {
 };
 
 // Tracer::refined_hit's first attempt where the packet's candidate is a facet of one of the
-// object's caps: the cap's root within the candidate's window, the exact guard over the other
-// patches (no cutting defect in the scene) finding nothing nearer, and on_surface. A lane where
-// anything else happens (a root outside the window, a guard hit, a non-finite result) is the
+// object's caps: no ellipsoid near the segment up to the candidate (Tracer::packet_answers), the
+// cap's root within the candidate's window, the exact guard over the other patches (no cutting
+// defect in the scene) finding nothing nearer, and on_surface. A lane where anything else happens
+// (an ellipsoid near, a root outside the window, a guard hit, a non-finite result) is the
 // scalar's.
 struct RefineLanes {
     Vec3s o, d;                               // in: the rays

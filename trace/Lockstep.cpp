@@ -87,9 +87,9 @@ void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h,
 
 void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h,
                                 PathStats* stats) const {
-    // The lanes whose packet candidate is a facet of a cap and the single query's answer
-    // (packet_answers), and the lanes in the air whose packet found nothing; the rest take
-    // refined_hit with their candidate as it is.
+    // The lanes whose packet candidate is a facet of a cap (the kernel checks that it is the single
+    // query's answer, packet_answers) and the lanes in the air whose packet found nothing; the rest
+    // take refined_hit with their candidate as it is.
     const lanes::ObjectLanes obj = object_lanes(object_patches_, solid_.surfaces, user_patches_);
     const lanes::Kernels& kernels = lanes::kernels();
     lanes::RefineLanes r;
@@ -110,7 +110,7 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
             continue;
         }
         if (!(cj.hit && !cj.analytic && cj.tag >= 0 && cj.tag < static_cast<int>(object_patches_.size()) &&
-              object_patches_[static_cast<size_t>(cj.tag)].kind == Patch::Kind::Cap && packet_answers(cj, st[i].o, st[i].d))) {
+              object_patches_[static_cast<size_t>(cj.tag)].kind == Patch::Kind::Cap)) {
             h[i] = propagate(st[i], stats[i], &cj);
             continue;
         }
