@@ -1,9 +1,7 @@
 #include "trace/Render.h"
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -82,72 +80,6 @@ struct BlockRows {
         stats = PathStats{};
         defects.clear();
     }
-};
-
-// An array that grows in fixed chunks instead of one doubling vector: appending never copies what
-// is there, and each chunk is its own anonymous mapping (mmap), so its pages go back to the system
-// the moment they are released, whatever the allocator's thresholds. Pages are touched only as
-// they are written, so a small render's RSS is what it writes, not a chunk. move_to copies the
-// array into the final vector in steps of kStep elements and releases each step's pages right
-// after (madvise MADV_DONTNEED), so moving T costs one step beyond T itself, not a second T.
-template <class T>
-class ChunkedArray {
-public:
-    static constexpr std::size_t kChunk = std::size_t(1) << 22;  // elements: 16 MiB of 4-byte values
-    static constexpr std::size_t kStep = std::size_t(1) << 18;   // 1 MiB, a multiple of the page size
-    static_assert(std::is_trivially_copyable_v<T>, "chunks hold plain values");
-
-    ChunkedArray() = default;
-    ChunkedArray(const ChunkedArray&) = delete;
-    ChunkedArray& operator=(const ChunkedArray&) = delete;
-    ~ChunkedArray() { clear(); }
-
-    void append(const T* v, std::size_t n) {
-        while (n > 0) {
-            if (size_ == chunks_.size() * kChunk) {
-                void* p = ::mmap(nullptr, kChunk * sizeof(T), PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-                if (p == MAP_FAILED) throw std::bad_alloc();
-                chunks_.push_back(static_cast<T*>(p));
-            }
-            const std::size_t at = size_ % kChunk, m = std::min(n, kChunk - at);
-            std::memcpy(chunks_.back() + at, v, m * sizeof(T));
-            v += m;
-            n -= m;
-            size_ += m;
-        }
-    }
-    std::size_t size() const { return size_; }
-    // Copies [from, from + n) to out (n elements).
-    void copy(std::size_t from, std::size_t n, T* out) const {
-        while (n > 0) {
-            const std::size_t at = from % kChunk, m = std::min(n, kChunk - at);
-            std::memcpy(out, chunks_[from / kChunk] + at, m * sizeof(T));
-            out += m;
-            from += m;
-            n -= m;
-        }
-    }
-    // Moves everything to the end of `out` (reserved once to its final size), releasing the pages
-    // behind the copy as it goes, then frees the chunks.
-    void move_to(std::vector<T>& out) {
-        out.reserve(out.size() + size_);
-        for (std::size_t from = 0; from < size_; from += kStep) {
-            T* src = chunks_[from / kChunk] + from % kChunk;
-            const std::size_t m = std::min(kStep, size_ - from);
-            out.insert(out.end(), src, src + m);
-            ::madvise(src, kStep * sizeof(T), MADV_DONTNEED);  // within the chunk: kChunk is a multiple of kStep
-        }
-        clear();
-    }
-    void clear() {
-        for (T* c : chunks_) ::munmap(c, kChunk * sizeof(T));
-        chunks_.clear();
-        size_ = 0;
-    }
-
-private:
-    std::vector<T*> chunks_;
-    std::size_t size_ = 0;
 };
 
 }  // namespace
@@ -338,14 +270,29 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         progress.add(std::min(items, (b + 1) * kBlock) - b * kBlock);
     };
 
-    // T as it is assembled: the row offsets (whole), the entries in chunks; once streaming, only
-    // the current wave's rows, handed to the sink.
-    ChunkedArray<std::int32_t> held_indices;
-    ChunkedArray<float> held_data;
+    // T as it is assembled: the row offsets (whole) and the entries; once streaming, only the
+    // current wave's rows, handed to the sink.
+    // The entries' arrays are reserved once for the most entries the render can hold: one per
+    // branch a camera sample ends in (one with the sample estimator, at most 2^split_depth with
+    // the split one), and no more than the budget lets it hold before it streams (plus one wave).
+    // A reservation's pages are mapped only as they are written, so memory is what T fills; the
+    // arrays never grow by copying (unless a render without a budget outgrows kUnbudgeted), and
+    // a whole T is moved out at the end, not copied: each copy's first touches of fresh pages
+    // were most of the serial time of a short render.
+    std::vector<std::int32_t> held_indices;
+    std::vector<float> held_data;
     std::vector<std::int64_t> indptr;
     if (!pattern) {
         indptr.reserve(static_cast<size_t>(K) + 1);
         indptr.push_back(0);
+        const TracingDesc& tracing = scene.tracing;
+        const double branches = tracing.estimator == Estimator::Split ? std::ldexp(1.0, tracing.split_depth) : 1.0;
+        const double per_wave = branches * spp * static_cast<double>(wave_blocks * kBlock);
+        constexpr double kUnbudgeted = double(std::size_t(1) << 27);  // entries: 512 MiB per array
+        const double cap = streaming ? static_cast<double>(opt.max_matrix_bytes) / 8.0 + per_wave : kUnbudgeted;
+        const double most = std::min(branches * spp * static_cast<double>(items), cap);
+        held_indices.reserve(static_cast<size_t>(most));
+        held_data.reserve(static_cast<size_t>(most));
     }
     std::int64_t sent_rows = 0;  // rows already given to the sink
     std::size_t total_nnz = 0;
@@ -374,14 +321,15 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 block.indptr[static_cast<size_t>(r - r0)] = indptr[static_cast<size_t>(r)] - static_cast<std::int64_t>(from);
             block.indices.resize(n);
             block.data.resize(n);
-            held_indices.copy(from, n, block.indices.data());
-            held_data.copy(from, n, block.data.data());
+            std::copy_n(held_indices.data() + from, n, block.indices.data());
+            std::copy_n(held_data.data() + from, n, block.data.data());
             opt.row_sink->rows(sent_rows + r0, block);
             r0 = r1;
         }
         sent_rows += rows_held;
-        held_indices.clear();
-        held_data.clear();
+        // Released, not kept: from now on the arrays hold one wave's rows at a time.
+        std::vector<std::int32_t>().swap(held_indices);
+        std::vector<float>().swap(held_data);
         indptr.assign(1, 0);
     };
 
@@ -402,8 +350,8 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                     // Rows outside the pixel subset stay empty.
                     while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < k) indptr.push_back(indptr.back());
                     const auto n = static_cast<size_t>(br.row_nnz[static_cast<size_t>(item - b * kBlock)]);
-                    held_indices.append(br.columns.data() + at, n);
-                    held_data.append(br.values.data() + at, n);
+                    held_indices.insert(held_indices.end(), br.columns.data() + at, br.columns.data() + at + n);
+                    held_data.insert(held_data.end(), br.values.data() + at, br.values.data() + at + n);
                     indptr.push_back(indptr.back() + static_cast<std::int64_t>(n));
                     at += n;
                     total_nnz += n;
@@ -415,9 +363,17 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             }
         }
     };
-    std::chrono::steady_clock::time_point t_merge;
-    const auto assemble = [&] {
-        if (pattern) return;
+    if (opt.threads > 0) {
+        tbb::task_arena arena(opt.threads);
+        arena.execute(run_waves);
+    } else {
+        run_waves();
+    }
+    std::vector<BlockRows>().swap(wave);
+
+    const auto t_merge = std::chrono::steady_clock::now();
+    out.trace_seconds = std::chrono::duration<double>(t_merge - t0).count();
+    if (!pattern) {
         while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < K) indptr.push_back(indptr.back());
         out.nnz = total_nnz;
         if (out.streamed) {
@@ -427,24 +383,10 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
             T.rows = K;
             T.cols = L;
             T.indptr = std::move(indptr);
-            // Column indices and values side by side: each copy is mostly first touches of fresh
-            // pages, which two threads take in half the time (a 64 spp paper render: 4.4 -> 2.5 ms).
-            tbb::parallel_invoke([&] { held_indices.move_to(T.indices); }, [&] { held_data.move_to(T.data); });
+            T.indices = std::move(held_indices);
+            T.data = std::move(held_data);
         }
-    };
-    const auto trace_and_assemble = [&] {
-        run_waves();
-        std::vector<BlockRows>().swap(wave);
-        t_merge = std::chrono::steady_clock::now();
-        assemble();
-    };
-    if (opt.threads > 0) {
-        tbb::task_arena arena(opt.threads);
-        arena.execute(trace_and_assemble);
-    } else {
-        trace_and_assemble();
     }
-    out.trace_seconds = std::chrono::duration<double>(t_merge - t0).count();
     const auto t_end = std::chrono::steady_clock::now();
     out.merge_seconds = std::chrono::duration<double>(t_end - t_merge).count();
     out.seconds = std::chrono::duration<double>(t_end - t0).count();
