@@ -1,6 +1,7 @@
 #include "trace/Render.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
 
@@ -185,7 +186,11 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     // appended (enough per thread that the barrier between waves costs little).
     const long arena_threads = opt.threads > 0 ? opt.threads : tbb::this_task_arena::max_concurrency();
     const long wave_blocks = std::max(256L, 16L * arena_threads);
-    std::vector<BlockRows> wave(static_cast<size_t>(std::min(blocks, wave_blocks)));
+    // Two waves' buffers: while one wave is traced in parallel, this thread appends the wave
+    // before it (run_waves).
+    std::vector<BlockRows> waves[2];
+    waves[0].resize(static_cast<size_t>(std::min(blocks, wave_blocks)));
+    waves[1].resize(static_cast<size_t>(std::min(std::max(0L, blocks - wave_blocks), wave_blocks)));
 
     auto render_block = [&](long b, BlockRows& br) {
         PathStats& stats = br.stats;
@@ -333,35 +338,57 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         indptr.assign(1, 0);
     };
 
-    const auto run_waves = [&] {
-        for (long w0 = 0; w0 < blocks; w0 += wave_blocks) {
-            const long w1 = std::min(blocks, w0 + wave_blocks);
-            for (long b = w0; b < w1; ++b) wave[static_cast<size_t>(b - w0)].clear();
-            tbb::parallel_for(w0, w1, [&](long b) { render_block(b, wave[static_cast<size_t>(b - w0)]); });
-            // In block order: statistics, defect counts, rows.
-            for (long b = w0; b < w1; ++b) {
-                BlockRows& br = wave[static_cast<size_t>(b - w0)];
-                out.stats.merge(br.stats);
-                out.defect_paths.insert(out.defect_paths.end(), br.defects.begin(), br.defects.end());
-                if (pattern) continue;
-                size_t at = 0;
-                for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
-                    const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
-                    // Rows outside the pixel subset stay empty.
-                    while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < k) indptr.push_back(indptr.back());
-                    const auto n = static_cast<size_t>(br.row_nnz[static_cast<size_t>(item - b * kBlock)]);
-                    held_indices.insert(held_indices.end(), br.columns.data() + at, br.columns.data() + at + n);
-                    held_data.insert(held_data.end(), br.values.data() + at, br.values.data() + at + n);
-                    indptr.push_back(indptr.back() + static_cast<std::int64_t>(n));
-                    at += n;
-                    total_nnz += n;
-                }
-            }
-            if (streaming && (out.streamed || held_bytes() > static_cast<double>(opt.max_matrix_bytes))) {
-                out.streamed = true;
-                send_held();
+    // A traced wave's blocks in block order: statistics, defect counts, rows (and, once over the
+    // budget, the rows to the sink).
+    const auto append_wave = [&](long w0, std::vector<BlockRows>& wave) {
+        const long w1 = std::min(blocks, w0 + wave_blocks);
+        for (long b = w0; b < w1; ++b) {
+            BlockRows& br = wave[static_cast<size_t>(b - w0)];
+            out.stats.merge(br.stats);
+            out.defect_paths.insert(out.defect_paths.end(), br.defects.begin(), br.defects.end());
+            if (pattern) continue;
+            size_t at = 0;
+            for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
+                const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
+                // Rows outside the pixel subset stay empty.
+                while (sent_rows + static_cast<std::int64_t>(indptr.size()) - 1 < k) indptr.push_back(indptr.back());
+                const auto n = static_cast<size_t>(br.row_nnz[static_cast<size_t>(item - b * kBlock)]);
+                held_indices.insert(held_indices.end(), br.columns.data() + at, br.columns.data() + at + n);
+                held_data.insert(held_data.end(), br.values.data() + at, br.values.data() + at + n);
+                indptr.push_back(indptr.back() + static_cast<std::int64_t>(n));
+                at += n;
+                total_nnz += n;
             }
         }
+        if (streaming && (out.streamed || held_bytes() > static_cast<double>(opt.max_matrix_bytes))) {
+            out.streamed = true;
+            send_held();
+        }
+    };
+    // Each wave is traced in parallel while this thread appends the wave before it (the copy of
+    // its rows is serial, and mostly first touches of T's pages), then joins the tracing; only
+    // the last wave's append is left alone at the end. Appends stay in wave and block order.
+    const auto run_waves = [&] {
+        long pending = -1;  // the first block of the traced wave not yet appended
+        for (long w0 = 0; w0 < blocks; w0 += wave_blocks) {
+            const long w1 = std::min(blocks, w0 + wave_blocks);
+            std::vector<BlockRows>& wave = waves[(w0 / wave_blocks) % 2];
+            for (long b = w0; b < w1; ++b) wave[static_cast<size_t>(b - w0)].clear();
+            tbb::task_group tracing;
+            tracing.run([&] { tbb::parallel_for(w0, w1, [&](long b) { render_block(b, wave[static_cast<size_t>(b - w0)]); }); });
+            if (pending >= 0) {
+                try {
+                    append_wave(pending, waves[(pending / wave_blocks) % 2]);
+                } catch (...) {
+                    tracing.cancel();
+                    tracing.wait();
+                    throw;
+                }
+            }
+            tracing.wait();
+            pending = w0;
+        }
+        if (pending >= 0) append_wave(pending, waves[(pending / wave_blocks) % 2]);
     };
     if (opt.threads > 0) {
         tbb::task_arena arena(opt.threads);
@@ -369,7 +396,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     } else {
         run_waves();
     }
-    std::vector<BlockRows>().swap(wave);
+    for (auto& w : waves) std::vector<BlockRows>().swap(w);
 
     const auto t_merge = std::chrono::steady_clock::now();
     out.trace_seconds = std::chrono::duration<double>(t_merge - t0).count();
