@@ -48,6 +48,20 @@ lanes::ObjectLanes object_lanes(const std::vector<Patch>& patches, const Surface
     return obj;
 }
 
+// Lanes [n, count) of the kernels' arrays as copies of lane 0: finite inputs whose results
+// nobody reads (the kernels go through whole vectors).
+void pad(int n, int count, lanes::Vec3s& v) {
+    for (int j = n; j < count; ++j) v.set(j, v.get(0));
+}
+template <class T, size_t N>
+void pad(int n, int count, T (&a)[N]) {
+    for (int j = n; j < count; ++j) a[j] = a[0];
+}
+template <class... Arrays>
+void pad_lanes(int n, int count, Arrays&... arrays) {
+    (pad(n, count, arrays), ...);
+}
+
 }  // namespace
 
 void Tracer::lanes_analytic_hits(int m, const int* ids, const State* st, Hit* h, PathStats* stats) const {
@@ -132,10 +146,7 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
         // with tmax = inf is analytic_hit's) and, where there is none, the ellipsoids' test over
         // the whole ray (packet_answers'). Any other outcome is refined_hit's to judge.
         const int count = kernels.count(misses);
-        for (int j = misses; j < count; ++j) {  // lanes past misses repeat the first: finite, ignored
-            miss.o.set(j, miss.o.get(0));
-            miss.d.set(j, miss.d.get(0));
-        }
+        pad_lanes(misses, count, miss.o, miss.d);
         kernels.analytic_segments(obj, miss, count);
         for (int k = 0; k < misses; ++k) {
             const int j = miss_of[k];
@@ -155,14 +166,7 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
     }
     if (n == 0) return;
     const int count = kernels.count(n);
-    for (int j = n; j < count; ++j) {  // lanes past n repeat the first: finite, ignored
-        r.o.set(j, r.o.get(0));
-        r.d.set(j, r.d.get(0));
-        r.face_normal.set(j, r.face_normal.get(0));
-        r.candidate_t[j] = r.candidate_t[0];
-        r.patch[j] = r.patch[0];
-        r.chord[j] = r.chord[0];
-    }
+    pad_lanes(n, count, r.o, r.d, r.face_normal, r.candidate_t, r.patch, r.chord);
     kernels.refine_segments(obj, r, count, trace_tol::kOriginFloor * scale_);
     for (int k = 0; k < n; ++k) {
         const int j = lane_of[k];
@@ -246,16 +250,7 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
 
     const lanes::Kernels& kernels = lanes::kernels();
     const int count = kernels.count(n);
-    for (int j = n; j < count; ++j) {  // lanes past n repeat the first: finite, ignored
-        a.d_in.set(j, a.d_in.get(0));
-        a.n_out.set(j, a.n_out.get(0));
-        a.p.set(j, a.p.get(0));
-        a.offset[j] = a.offset[0];
-        a.n_from[j] = a.n_from[0];
-        a.n_to[j] = a.n_to[0];
-        a.entering[j] = a.entering[0];
-        a.skip_chord[j] = a.skip_chord[0];
-    }
+    pad_lanes(n, count, a.d_in, a.n_out, a.p, a.offset, a.n_from, a.n_to, a.entering, a.skip_chord);
     kernels.fresnel(a, count);
     // The Fresnel choice, drawn from each path's own stream as interact draws it.
     for (int j = 0; j < n; ++j) {
@@ -269,7 +264,7 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         }
         a.reflect[j] = r ? -1 : 0;
     }
-    for (int j = n; j < count; ++j) a.reflect[j] = a.reflect[0];
+    pad_lanes(n, count, a.reflect);
     kernels.spawn(a, count, trace_tol::kSkipFloatUlps * trace_tol::kFloatUlp * scale_);
     for (int j = 0; j < n; ++j) {
         const int i = ids[lane_of[j]];
