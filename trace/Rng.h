@@ -36,7 +36,7 @@ public:
         state_ += h;
         next_u32();
     }
-    // A placeholder stream (state 0, increment 1), to be assigned a real one.
+    // The stream of state 0 and increment 1, for arrays of streams each assigned before its first draw.
     Rng() = default;
     // The stream whose next draw follows `state` (with increment `inc`, odd): where a SIMD twin of
     // this class (trace/LaneKernels.h, camera_draws) left a stream it drew from.
