@@ -11,9 +11,6 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
-#include <cstring>
-#include <new>
-#include <type_traits>
 #include <mutex>
 #include <thread>
 
