@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
         RenderOptions ro;
         ro.threads = threads;
         const std::uint64_t segments = render(analytic, ro).stats.segments;
-        bare = bench::bare_embree_seconds(mesh, bench::record_segments(analytic, 400), segments, threads, reps);
+        bare = bench::bare_embree_seconds(mesh, bench::record_segments(analytic), segments, threads, reps);
         std::printf("baseline: %llu bare rtcIntersect1 calls (one sample's segments) take %.3f s on %d threads\n",
                     static_cast<unsigned long long>(segments), bare, threads);
     }
