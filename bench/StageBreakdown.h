@@ -7,8 +7,9 @@
 //   camera        for_each_camera_sample over every pixel: the stream per sample, the stratified
 //                 position, the direction on the aperture disc (Camera.h);
 //   intersection  bare Embree calls on the mesh-only representation's triangles, one per segment
-//                 of the render: the camera segments in packets of 16 (rtcIntersect16, coherent)
-//                 where the tracer uses packets (Tracer::packets), the others rtcIntersect1 (the
+//                 of the render: the camera segments in the render's batches of 64, regrouped by
+//                 octant into packets of 16 (EmbreeScene::intersect_coherent: rtcIntersect16,
+//                 coherent) where the tracer uses packets (Tracer::packets), the others rtcIntersect1 (the
 //                 mesh representations; 0 for analytic, which calls no BVH for the object's faces);
 //   hit           Tracer::first_hits on the camera segments (in packets, as the render) and
 //                 Tracer::first_hit on every other recorded segment from its recorded start: the
@@ -59,7 +60,7 @@ struct Interaction {
 // interactions, and each pixel's row entries.
 struct Workload {
     // Camera segments (the first of each path, a pixel's samples consecutive, so that replays in
-    // packets of 16 see the render's packets), and the rest.
+    // batches of 64 see the render's batches), and the rest.
     std::vector<Vec3> camera_o, camera_d;
     std::vector<SegmentStart> segments;
     std::vector<Interaction> interactions;
@@ -147,23 +148,23 @@ inline StageTimes stage_breakdown(const Tracer& tracer, const Tracer& mesh_only,
 
     const Workload w = record(tracer, record_pixels);
     const std::uint64_t S = st.segments, I = st.interactions, P = st.paths;
-    // The camera segments in the render's packets: P of them, 16 at a time (the last of a pixel's
-    // packets may be partial in the render; here they run cyclically through the recorded ones).
+    // The camera segments in the render's batches: P of them, 64 at a time (the last of a pixel's
+    // batches may be partial in the render; here they run cyclically through the recorded ones).
     const size_t nc = w.camera_o.size();
-    const auto packets_of = [&](auto&& f) {
-        for (std::uint64_t j = 0; j < P; j += Tracer::kPacket) {
+    const auto batches_of = [&](auto&& f) {
+        for (std::uint64_t j = 0; j < P; j += Tracer::kBatch) {
             const size_t a = static_cast<size_t>(j % nc);
-            const int n = static_cast<int>(std::min<std::uint64_t>({Tracer::kPacket, P - j, nc - a}));
+            const int n = static_cast<int>(std::min<std::uint64_t>({Tracer::kBatch, P - j, nc - a}));
             f(a, n);
         }
     };
     if (tracer.representation() != Representation::Analytic)
         st.intersection = seconds_of(reps, [&] {
             long hits = 0;
-            Candidate c[Tracer::kPacket];
-            packets_of([&](size_t a, int n) {
+            Candidate c[Tracer::kBatch];
+            batches_of([&](size_t a, int n) {
                 if (tracer.packets() && n >= 2) {
-                    mesh_only.embree().intersect_packet(&w.camera_o[a], &w.camera_d[a], n, c);
+                    mesh_only.embree().intersect_coherent(&w.camera_o[a], &w.camera_d[a], n, c);
                     for (int i = 0; i < n; ++i) hits += c[i].hit;
                 } else {
                     for (int i = 0; i < n; ++i) hits += mesh_only.embree().raw_intersect(w.camera_o[a + i], w.camera_d[a + i], 0.0f) >= 0;
@@ -177,8 +178,8 @@ inline StageTimes stage_breakdown(const Tracer& tracer, const Tracer& mesh_only,
         });
     PathStats scratch;
     st.hit = seconds_of(reps, [&] {
-                 Tracer::FirstHit f[Tracer::kPacket];
-                 packets_of([&](size_t a, int n) {
+                 Tracer::FirstHit f[Tracer::kBatch];
+                 batches_of([&](size_t a, int n) {
                      tracer.first_hits(n, &w.camera_o[a], &w.camera_d[a], f, scratch);
                      sink += f[0].t;
                  });

@@ -122,7 +122,7 @@ TEST(Packets, RefinedAndMeshOnlyUsePacketsAndMatchSingleRaysBitForBit) {
         const Tracer t = make(b, r);
         ASSERT_TRUE(t.packets());  // Debian's Embree honours ray masks: packets are on
         ASSERT_TRUE(t.lockstep());  // the sample estimator, no absorption: whole paths side by side
-        for (int size : {Tracer::kPacket, 5}) {
+        for (int size : {Tracer::kBatch, Tracer::kPacket + 1, Tracer::kPacket, 5}) {
             const PathStats s = expect_packets_match(t, size);
             EXPECT_GT(s.packet_segments, 0u);
             // Every first segment went one of the two ways, and so did later ones: packet
@@ -198,7 +198,7 @@ TEST(Packets, AnalyticTracesWholePathsInSimdLanesWithTheSameResults) {
         const Tracer t = make(b, Representation::Analytic, max_depth);
         EXPECT_FALSE(t.packets());
         ASSERT_TRUE(t.lockstep());
-        for (int size : {Tracer::kPacket, 5}) {
+        for (int size : {Tracer::kBatch, Tracer::kPacket + 1, Tracer::kPacket, 5}) {
             const PathStats s = expect_packets_match(t, size);
             EXPECT_EQ(s.packet_segments, 0u);
             EXPECT_GT(s.absorbed_particle, 0u);
@@ -244,13 +244,15 @@ seed: 6
     }
 }
 
-TEST(Packets, APacketHoldsAtMostSixteenSamples) {
+TEST(Packets, ABatchHoldsAtMostSixtyFourSamples) {
     const Built b = build(kLens);
     const Tracer t = make(b, Representation::Refined);
-    std::vector<Vec3> o(17), d(17, Vec3{0, 0, 1});
-    std::vector<Rng> r(17, Rng(1, 2, 3));
+    constexpr int n = Tracer::kBatch + 1;
+    static_assert(Tracer::kBatch == 64, "the test's name");
+    std::vector<Vec3> o(n), d(n, Vec3{0, 0, 1});
+    std::vector<Rng> r(n, Rng(1, 2, 3));
     std::vector<PathResult> out;
-    size_t ends[17];
-    EXPECT_THROW(t.sample_packet(17, o.data(), d.data(), r.data(), *std::make_unique<PathStats>(), out, ends),
+    size_t ends[n];
+    EXPECT_THROW(t.sample_packet(n, o.data(), d.data(), r.data(), *std::make_unique<PathStats>(), out, ends),
                  std::invalid_argument);
 }

@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -253,6 +254,51 @@ void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidat
         }
         out[i] = c;
     }
+}
+
+void EmbreeScene::intersect_coherent(const Vec3* o, const Vec3* d, int n, Candidate* out) const {
+    // A counting sort of the rays by octant, as Embree forms it from the float direction's signs
+    // (any grouping gives the same answers; this one gives full packets).
+    int small[256];
+    std::vector<int> large;
+    int* order = small;
+    if (n > 256) {
+        large.resize(static_cast<size_t>(n));
+        order = large.data();
+    }
+    int start[9] = {};
+    const auto octant = [&](int i) {
+        return (static_cast<float>(d[i].x) < 0.0f ? 1 : 0) | (static_cast<float>(d[i].y) < 0.0f ? 2 : 0) |
+               (static_cast<float>(d[i].z) < 0.0f ? 4 : 0);
+    };
+    for (int i = 0; i < n; ++i) ++start[octant(i) + 1];
+    for (int k = 0; k < 8; ++k) start[k + 1] += start[k];
+    int fill[8];
+    std::copy(start, start + 8, fill);
+    for (int i = 0; i < n; ++i) order[fill[octant(i)]++] = i;
+    // Whole packets of one octant first, then the octants' remainders pooled into packets.
+    Vec3 po[kPacket], pd[kPacket];
+    Candidate pc[kPacket];
+    int lane_ray[kPacket];
+    int m = 0;
+    const auto flush = [&] {
+        intersect_packet(po, pd, m, pc);
+        for (int j = 0; j < m; ++j) out[lane_ray[j]] = pc[j];
+        m = 0;
+    };
+    const auto add = [&](int i) {
+        po[m] = o[i];
+        pd[m] = d[i];
+        lane_ray[m++] = i;
+        if (m == kPacket) flush();
+    };
+    for (int k = 0; k < 8; ++k)
+        for (int j = start[k]; j + kPacket <= start[k + 1]; j += kPacket)
+            for (int l = 0; l < kPacket; ++l) add(order[j + l]);
+    for (int k = 0; k < 8; ++k)
+        for (int j = start[k] + (start[k + 1] - start[k]) / kPacket * kPacket; j < start[k + 1]; ++j)
+            add(order[j]);
+    if (m > 0) flush();
 }
 
 long EmbreeScene::raw_intersect(const Vec3& o, const Vec3& d, float tmin) const {

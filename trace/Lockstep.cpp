@@ -302,13 +302,13 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
 }
 
 void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
-                             std::vector<PathResult>& out, size_t* ends) const {
+                             std::vector<PathResult>& out, size_t* ends, const Candidate* camera) const {
     const bool analytic = options_.representation == Representation::Analytic;
     State st[kPacket];
     PathStats lane[kPacket];
     Hit h[kPacket];
     bool live[kPacket];
-    if (!analytic && !refined_lanes_) packet_hits(n, origins, directions, h, lane, 1);
+    if (!analytic && !refined_lanes_) packet_hits(n, origins, directions, h, lane, 1, camera);
     int ids[kPacket];
     int m = 0;
     for (int i = 0; i < n; ++i) {
@@ -320,14 +320,9 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
         if (live[i]) ids[m++] = i;
     }
     if (analytic && m > 0) lanes_analytic_hits(m, ids, st, h, lane);
-    if (refined_lanes_ && m > 0) {  // the camera rays' packet (nothing to skip), refined in lanes
-        Vec3 o[kPacket], d[kPacket];
+    if (refined_lanes_ && m > 0) {  // the camera rays' candidates (nothing to skip), refined in lanes
         Candidate c[kPacket];
-        for (int j = 0; j < m; ++j) {
-            o[j] = st[ids[j]].o;
-            d[j] = st[ids[j]].d;
-        }
-        embree_->intersect_packet(o, d, m, c);
+        for (int j = 0; j < m; ++j) c[j] = camera[ids[j]];
         lanes_refined_hits(m, ids, st, c, h, lane);
     }
     while (m > 0) {

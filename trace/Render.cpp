@@ -196,10 +196,10 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         // The branches of one packet of camera samples (one per sample with the sample
         // estimator); reused, so after the first samples no allocation happens per sample.
         std::vector<PathResult> branches;
-        Vec3 packet_o[Tracer::kPacket], packet_d[Tracer::kPacket];
+        Vec3 packet_o[Tracer::kBatch], packet_d[Tracer::kBatch];
         std::vector<Rng> packet_rng;
-        packet_rng.reserve(Tracer::kPacket);
-        size_t packet_end[Tracer::kPacket];
+        packet_rng.reserve(Tracer::kBatch);
+        size_t packet_end[Tracer::kBatch];
         for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
             const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
             const size_t first_count = br.defects.size();
@@ -239,7 +239,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                     sum2 += f * f;
                 }
             };
-            // The pixel's samples in packets of Tracer::kPacket (Tracer::sample_packet), consumed
+            // The pixel's samples in batches of Tracer::kBatch (Tracer::sample_packet), consumed
             // in sample order: the same results as one sample at a time.
             int pn = 0;
             const auto flush = [&] {
@@ -253,7 +253,7 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 packet_o[pn] = o;
                 packet_d[pn] = d;
                 packet_rng.push_back(rng);
-                if (++pn == Tracer::kPacket) flush();
+                if (++pn == Tracer::kBatch) flush();
             });
             if (pn > 0) flush();
             if (opt.track_defects)

@@ -996,7 +996,7 @@ void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, P
 
 void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                            std::vector<PathResult>& out, size_t* ends) const {
-    if (n < 0 || n > kPacket) throw std::invalid_argument("Tracer::sample_packet: more samples than a packet holds");
+    if (n < 0 || n > kBatch) throw std::invalid_argument("Tracer::sample_packet: more samples than a batch holds");
     if (!(packets_ || lockstep_) || n < 2) {
         for (int i = 0; i < n; ++i) {
             sample_paths_from(origins[i], directions[i], rngs[i], stats, out, nullptr);
@@ -1004,26 +1004,37 @@ void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, R
         }
         return;
     }
-    if (lockstep_) {
-        sample_lockstep(n, origins, directions, rngs, stats, out, ends);
-        return;
-    }
     // The first segment draws no random number, so finding it ahead of the path changes nothing
-    // the path draws.
-    Hit h[kPacket];
-    packet_hits(n, origins, directions, h, &stats, 0);
-    for (int i = 0; i < n; ++i) {
-        sample_paths_from(origins[i], directions[i], rngs[i], stats, out, &h[i]);
-        ends[i] = out.size();
+    // the path draws. The camera rays of the whole batch are queried together, regrouped by
+    // octant (EmbreeScene::intersect_coherent); the paths then go in packets of kPacket, in order.
+    const bool mesh = options_.representation != Representation::Analytic;
+    Candidate camera[kBatch];
+    if (mesh) embree_->intersect_coherent(origins, directions, n, camera);
+    for (int a = 0; a < n; a += kPacket) {
+        const int m = std::min(kPacket, n - a);
+        if (lockstep_) {
+            sample_lockstep(m, origins + a, directions + a, rngs + a, stats, out, ends + a, mesh ? camera + a : nullptr);
+            continue;
+        }
+        Hit h[kPacket];
+        packet_hits(m, origins + a, directions + a, h, &stats, 0, camera + a);
+        for (int i = a; i < a + m; ++i) {
+            sample_paths_from(origins[i], directions[i], rngs[i], stats, out, &h[i - a]);
+            ends[i] = out.size();
+        }
     }
 }
 
-void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats,
-                         int stride) const {
-    // One coherent packet of triangle candidates, each finished as its own query would be
-    // (refined_hit, mesh_only_hit).
-    Candidate c[kPacket];
-    embree_->intersect_packet(origins, directions, n, c);
+void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats, int stride,
+                         const Candidate* found) const {
+    // One coherent packet of triangle candidates (or the candidates found already), each finished
+    // as its own query would be (refined_hit, mesh_only_hit).
+    Candidate queried[kPacket];
+    const Candidate* c = found;
+    if (!c) {
+        embree_->intersect_packet(origins, directions, n, queried);
+        c = queried;
+    }
     for (int i = 0; i < n; ++i) {
         State st;
         st.o = origins[i];
@@ -1034,10 +1045,13 @@ void Tracer::packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit
 }
 
 void Tracer::first_hits(int n, const Vec3* origins, const Vec3* directions, FirstHit* out, PathStats& stats) const {
-    if (n < 0 || n > kPacket) throw std::invalid_argument("Tracer::first_hits: more rays than a packet holds");
-    Hit h[kPacket];
+    if (n < 0 || n > kBatch) throw std::invalid_argument("Tracer::first_hits: more rays than a batch holds");
+    Hit h[kBatch];
     if (packets_ && n >= 2) {
-        packet_hits(n, origins, directions, h, &stats, 0);
+        Candidate c[kBatch];
+        embree_->intersect_coherent(origins, directions, n, c);
+        for (int a = 0; a < n; a += kPacket)
+            packet_hits(std::min(kPacket, n - a), origins + a, directions + a, h + a, &stats, 0, c + a);
     } else {
         for (int i = 0; i < n; ++i) {
             State st;

@@ -146,12 +146,15 @@ public:
     // Every branch draws from `rng` in that order, so the results depend on the stream alone.
     void sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
                       std::vector<PathResult>& out) const;
-    // The camera samples origins[i], directions[i] (i < n <= kPacket), each with its own stream
+    // The camera samples origins[i], directions[i] (i < n <= kBatch), each with its own stream
     // rngs[i], exactly as sample_paths one after another (the same results, bit for bit, in the
-    // same order; ends[i] = out.size() after sample i), with their first segments found in one
-    // coherent Embree packet where the representation allows (packets()): a pixel's camera rays
-    // are nearly parallel and start side by side, so they share their BVH traversal.
+    // same order; ends[i] = out.size() after sample i), with their first segments found in
+    // coherent Embree packets where the representation allows (packets()): a pixel's camera rays
+    // are nearly parallel and start side by side, so they share their BVH traversal. The batch's
+    // camera rays are queried together, regrouped by octant into full packets
+    // (EmbreeScene::intersect_coherent); the paths then go kPacket at a time.
     static constexpr int kPacket = EmbreeScene::kPacket;
+    static constexpr int kBatch = 4 * kPacket;
     void sample_packet(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                        std::vector<PathResult>& out, size_t* ends) const;
     // Whether sample_packet uses packets: the mesh representations, with a few enclosed
@@ -183,8 +186,8 @@ public:
     FirstHit first_hit(const Vec3& origin, const Vec3& direction, Medium medium, PathStats& stats) const;
     // The same step from a recorded segment start (PrincipalPath::segments), skip state included.
     FirstHit first_hit(const SegmentStart& start, PathStats& stats) const;
-    // The first segments of n <= kPacket camera rays (from the air, nothing to skip) as
-    // sample_packet finds them: in one packet where packets() allows.
+    // The first segments of n <= kBatch camera rays (from the air, nothing to skip) as
+    // sample_packet finds them: regrouped into packets where packets() allows.
     void first_hits(int n, const Vec3* origins, const Vec3* directions, FirstHit* out, PathStats& stats) const;
 
     const Scene& scene() const { return scene_; }
@@ -217,7 +220,9 @@ private:
     // The first segments' hits of n (2 <= n <= kPacket) camera rays from one packet (packets_).
     // Ray i counts into stats[i * stride]: all into one (stride 0) or each into its own (1,
     // sample_lockstep).
-    void packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats, int stride) const;
+    // `found`: the rays' candidates, queried already (intersect_coherent), in place of the packet.
+    void packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats, int stride,
+                     const Candidate* found = nullptr) const;
     // The fewest live paths sample_lockstep queries in one packet; fewer query alone (a
     // 16-wide packet of one or two rays costs more than their single queries).
     static constexpr int kMinLockstep = 2;
@@ -242,8 +247,9 @@ private:
     bool interact(State& st, const Hit& h, Rng* rng, PathStats& stats, PrincipalPath* record, SplitStack* split) const;
     // The camera samples of sample_packet traced side by side, one segment of each live path at a
     // time (lockstep(); trace/Lockstep.cpp).
+    // `camera`: the camera rays' triangle candidates (the mesh representations; null for analytic).
     void sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
-                         std::vector<PathResult>& out, size_t* ends) const;
+                         std::vector<PathResult>& out, size_t* ends, const Candidate* camera) const;
     // Its two steps over the lanes ids[0 .. m): the next interface of each (analytic: the object's
     // patches in SIMD lanes, scalar propagate for the lanes they cannot decide), and the
     // interaction at it (SIMD Fresnel, Snell and spawn; scalar interact for the uncommon ones).
