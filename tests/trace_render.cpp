@@ -697,11 +697,11 @@ display: {resolution: [40, 40], size: [200.0, 200.0], z: 30.0}
 // merge_row's contract: one entry per distinct column, ascending, each the weights of that column
 // added in the order they come, over spp, rounded once to float. With B = 2^53 the order is
 // visible even after the float: B, -B, 1 sums to 1, but B, 1, -B to 0 (B + 1 rounds to B, ties
-// to even). Checked for rows of up to 240 entries (merge_row's table) and of 300 (its sorted
-// merge), against the sums written out here.
+// to even). Checked for rows of up to 256 entries (merge_row's tables on the stack) and longer
+// (its thread's scratch, grown twice here), against the sums written out here.
 TEST(Render, MergeRowSumsEachColumnInSampleOrder) {
     const double B = std::ldexp(1.0, 53);
-    for (int distinct : {1, 3, 31, 32, 33, 80, 100}) {
+    for (int distinct : {1, 3, 31, 32, 33, 80, 85, 86, 100, 400, 1500, 7}) {
         std::vector<RowEntry> entries;
         // Column c (in a scrambled order): B, -B, 1 when c is even, B, 1, -B when it is odd.
         for (int pass = 0; pass < 3; ++pass)

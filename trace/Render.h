@@ -96,9 +96,8 @@ struct RowEntry {
     double weight;
 };
 // Appends the merged row to `columns` and `values`: one entry per distinct column of `entries`,
-// the weights summed in the order they come (a stable sort by column keeps sample order, so the
-// sum, and the float it rounds to, does not depend on threads) and divided by the samples per
-// pixel. Returns the row's length. May reorder `entries`.
+// the weights summed in the order they come (sample order, so the sum, and the float it rounds
+// to, does not depend on threads) and divided by the samples per pixel. Returns the row's length.
 std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std::int32_t>& columns,
                        std::vector<float>& values);
 
