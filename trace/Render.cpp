@@ -200,69 +200,59 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         PathStats& stats = br.stats;
         std::vector<RowEntry> entries;
         entries.reserve(static_cast<size_t>(spp));
-        // The branches of one packet of camera samples (one per sample with the sample
+        // The branches of one batch of camera samples (one per sample with the sample
         // estimator); reused, so after the first samples no allocation happens per sample.
         std::vector<PathResult> branches;
+        // A batch: up to Tracer::kBatch camera samples of the block's pixels in order, across
+        // pixels when a pixel has fewer samples (packets fill at low spp), traced by one
+        // Tracer::sample_packet and consumed in sample order: the same results as one at a time.
         Vec3 packet_o[Tracer::kBatch], packet_d[Tracer::kBatch];
         std::vector<Rng> packet_rng;
         packet_rng.reserve(Tracer::kBatch);
         size_t packet_end[Tracer::kBatch];
-        for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
-            const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
-            const size_t first_count = br.defects.size();
-            entries.clear();
-            double sum = 0, sum2 = 0;
-            // One camera sample's branches, branches[b, e): its value for the pattern, its
-            // entries of the row and the defects it met.
-            const auto consume = [&](size_t b0, size_t e0) {
-                // The sample's value for the pattern: the sum of its branches' contributions.
-                double f = 0;
-                bool on_display = false;
-                for (size_t i = b0; i < e0; ++i) {
-                    const PathResult& r = branches[i];
-                    // A sample met defect j first when one of its branches did; it counts once per
-                    // defect, so the counts stay numbers of samples (study/GroundTruth.h).
-                    const auto first_branch = branches.begin() + static_cast<long>(b0);
-                    const auto earlier = branches.begin() + static_cast<long>(i);
-                    if (opt.track_defects && r.defect >= 0 &&
-                        std::none_of(first_branch, earlier, [&](const PathResult& e) { return e.defect == r.defect; })) {
-                        auto& list = br.defects;
-                        auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
-                                               [&](const DefectPaths& e) { return e.defect == r.defect; });
-                        if (it == list.end())
-                            list.push_back({static_cast<std::int32_t>(k), r.defect, 1});
-                        else
-                            ++it->paths;
-                    }
-                    if (r.pixel < 0) continue;
-                    on_display = true;
-                    if (pattern)
-                        f += r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
+        long packet_k[Tracer::kBatch];  // each sample's camera pixel
+        int packet_s[Tracer::kBatch];   // and its index among the pixel's samples
+        int pn = 0;
+        // The pixel being consumed: its entries (above), the defects its samples met from
+        // br.defects[first_count] on, and the pattern's sums.
+        size_t first_count = 0;
+        double sum = 0, sum2 = 0;
+        // One camera sample of pixel k, branches[b, e): its value for the pattern, its entries of
+        // the row and the defects it met.
+        const auto consume = [&](long k, size_t b0, size_t e0) {
+            // The sample's value for the pattern: the sum of its branches' contributions.
+            double f = 0;
+            bool on_display = false;
+            for (size_t i = b0; i < e0; ++i) {
+                const PathResult& r = branches[i];
+                // A sample met defect j first when one of its branches did; it counts once per
+                // defect, so the counts stay numbers of samples (study/GroundTruth.h).
+                const auto first_branch = branches.begin() + static_cast<long>(b0);
+                const auto earlier = branches.begin() + static_cast<long>(i);
+                if (opt.track_defects && r.defect >= 0 &&
+                    std::none_of(first_branch, earlier, [&](const PathResult& e) { return e.defect == r.defect; })) {
+                    auto& list = br.defects;
+                    auto it = std::find_if(list.begin() + static_cast<long>(first_count), list.end(),
+                                           [&](const DefectPaths& e) { return e.defect == r.defect; });
+                    if (it == list.end())
+                        list.push_back({static_cast<std::int32_t>(k), r.defect, 1});
                     else
-                        entries.push_back({static_cast<std::int32_t>(r.pixel), r.weight});
+                        ++it->paths;
                 }
-                if (pattern && on_display) {
-                    sum += f;
-                    sum2 += f * f;
-                }
-            };
-            // The pixel's samples in batches of Tracer::kBatch (Tracer::sample_packet), consumed
-            // in sample order: the same results as one sample at a time.
-            int pn = 0;
-            const auto flush = [&] {
-                branches.clear();
-                tracer.sample_packet(pn, packet_o, packet_d, packet_rng.data(), stats, branches, packet_end);
-                for (int i = 0; i < pn; ++i) consume(i == 0 ? 0 : packet_end[i - 1], packet_end[i]);
-                packet_rng.clear();
-                pn = 0;
-            };
-            for_each_camera_sample(cam, seed, k, [&](int, Rng& rng, const Vec3& o, const Vec3& d) {
-                packet_o[pn] = o;
-                packet_d[pn] = d;
-                packet_rng.push_back(rng);
-                if (++pn == Tracer::kBatch) flush();
-            });
-            if (pn > 0) flush();
+                if (r.pixel < 0) continue;
+                on_display = true;
+                if (pattern)
+                    f += r.weight * static_cast<double>((*opt.pattern)[static_cast<size_t>(r.pixel)]);
+                else
+                    entries.push_back({static_cast<std::int32_t>(r.pixel), r.weight});
+            }
+            if (pattern && on_display) {
+                sum += f;
+                sum2 += f * f;
+            }
+        };
+        // Pixel k's row (or pattern value), once its last sample is consumed.
+        const auto finish = [&](long k) {
             if (opt.track_defects)
                 std::sort(br.defects.begin() + static_cast<long>(first_count), br.defects.end(),
                           [](const DefectPaths& a, const DefectPaths& c) { return a.defect < c.defect; });
@@ -272,10 +262,38 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
                 // Standard error of the mean from the unbiased sample variance.
                 const double var = spp > 1 ? std::max(0.0, (sum2 - n * mean * mean) / (n - 1)) : 0.0;
                 out.image_stderr[static_cast<size_t>(k)] = std::sqrt(var / n);
-                continue;
+                return;
             }
             br.row_nnz.push_back(merge_row(entries, spp, br.columns, br.values));
+        };
+        const auto flush = [&] {
+            branches.clear();
+            tracer.sample_packet(pn, packet_o, packet_d, packet_rng.data(), stats, branches, packet_end);
+            for (int i = 0; i < pn; ++i) {
+                const long k = packet_k[i];
+                if (packet_s[i] == 0) {  // a pixel begins
+                    first_count = br.defects.size();
+                    entries.clear();
+                    sum = sum2 = 0;
+                }
+                consume(k, i == 0 ? 0 : packet_end[i - 1], packet_end[i]);
+                if (packet_s[i] == spp - 1) finish(k);
+            }
+            packet_rng.clear();
+            pn = 0;
+        };
+        for (long item = b * kBlock; item < std::min(items, (b + 1) * kBlock); ++item) {
+            const long k = opt.pixels ? (*opt.pixels)[static_cast<size_t>(item)] : item;
+            for_each_camera_sample(cam, seed, k, [&](int s, Rng& rng, const Vec3& o, const Vec3& d) {
+                packet_o[pn] = o;
+                packet_d[pn] = d;
+                packet_k[pn] = k;
+                packet_s[pn] = s;
+                packet_rng.push_back(rng);
+                if (++pn == Tracer::kBatch) flush();
+            });
         }
+        if (pn > 0) flush();
         progress.add(std::min(items, (b + 1) * kBlock) - b * kBlock);
     };
 
