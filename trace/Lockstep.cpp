@@ -199,6 +199,23 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
     }
 }
 
+void Tracer::lanes_mesh_only_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h,
+                                  PathStats* stats) const {
+    // propagate -> straight_step -> straight_hit -> mesh_only_hit with the candidate, lane by
+    // lane: mesh-only media are straight (the constructor refuses others) and never escaped.
+    for (int j = 0; j < m; ++j) {
+        const int i = ids[j];
+        Hit& hh = h[i];
+        hh = Hit{};
+        ++stats[i].packet_segments;
+        if (c[j].hit) mesh_only_record(st[i].o, st[i].d, c[j], hh);
+        // straight_step's part: the record is never repaired here.
+        hh.d_in = st[i].d;
+        hh.length = hh.t;
+        hh.n_from = (*media_)[st[i].medium].index;
+    }
+}
+
 void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats,
                             bool* live) const {
     // Lanes the SIMD halves take: an optical interface between straight media, a finite hit, no
@@ -308,13 +325,21 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
     PathStats lane[kPacket];
     Hit h[kPacket];
     bool live[kPacket];
-    if (!analytic && !refined_lanes_) packet_hits(n, origins, directions, h, lane, 1, camera);
+    const bool mesh_only = options_.representation == Representation::MeshOnly;
     int ids[kPacket];
-    int m = 0;
     for (int i = 0; i < n; ++i) {
         st[i].o = origins[i];
         st[i].d = directions[i];
         st[i].medium = Medium::Air;
+        ids[i] = i;
+    }
+    // The camera segments' hits (whatever begin_segment then says, as the paths one at a time).
+    if (mesh_only)
+        lanes_mesh_only_hits(n, ids, st, camera, h, lane);
+    else if (!analytic && !refined_lanes_)
+        packet_hits(n, origins, directions, h, lane, 1, camera);
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
         ++lane[i].paths;
         live[i] = begin_segment(st[i], lane[i], nullptr);
         if (live[i]) ids[m++] = i;
@@ -372,6 +397,8 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
             embree_->intersect_packet(o, d, q, c, &skip);
             if (refined_lanes_)
                 lanes_refined_hits(q, query, st, c, h, lane);
+            else if (mesh_only)
+                lanes_mesh_only_hits(q, query, st, c, h, lane);
             else
                 for (int j = 0; j < q; ++j) h[query[j]] = propagate(st[query[j]], lane[query[j]], &c[j]);
         }

@@ -447,7 +447,11 @@ Tracer::Hit Tracer::mesh_only_hit(const State& st, PathStats& stats, const Candi
     const Candidate c = first ? *first : embree_->intersect(o, d, 0.0, INFINITY, skip, st.skip ? 1 : 0, st.skip_until);
     if (first) ++stats.packet_segments;
     Hit h;  // one named record on every return (see propagate)
-    if (!c.hit) return h;
+    if (c.hit) mesh_only_record(o, d, c, h);
+    return h;
+}
+
+void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const {
     h.found = true;
     h.t = c.t;
     h.tag = c.tag;
@@ -458,7 +462,6 @@ Tracer::Hit Tracer::mesh_only_hit(const State& st, PathStats& stats, const Candi
     // The float hit's error: a few float ulps of the coordinates involved.
     const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
     h.offset = trace_tol::kMeshOnlyOffsetUlps * kFloatUlp * mag;
-    return h;
 }
 
 bool Tracer::packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const {

@@ -214,6 +214,8 @@ private:
     Hit analytic_hit(const State& st, PathStats& stats) const;
     Hit refined_hit(const State& st, PathStats& stats, const Candidate* first) const;
     Hit mesh_only_hit(const State& st, PathStats& stats, const Candidate* first) const;
+    // mesh_only_hit's record of a triangle hit c of the ray (o, d), written into a reset h.
+    void mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const;
     // Whether a packet's triangle candidate c of the ray (o, d) is what the full single-ray query
     // returns: no ellipsoid patch (which the packet does not see) can lie before it.
     bool packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const;
@@ -258,6 +260,9 @@ private:
     // refined: the packet's candidates c[j] of the lanes ids[j], refined in SIMD lanes where they
     // are facets of the object's caps (refined_lanes_), by refined_hit otherwise.
     void lanes_refined_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h, PathStats* stats) const;
+    // mesh-only: the records of the candidates c[j] of the lanes ids[j], built in place in h[ids[j]],
+    // each what propagate(st, stats, &c[j]) returns (without its calls and the copy of its record).
+    void lanes_mesh_only_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h, PathStats* stats) const;
     void lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats, bool* live) const;
     // Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
     // test each) instead of querying Embree's BVH, whose call overhead is larger (measured, not a
