@@ -212,6 +212,7 @@ bool EmbreeScene::packets_supported() const { return impl_->masks && impl_->tri_
 void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip) const {
     if (n < 0 || n > kPacket) throw std::invalid_argument("EmbreeScene::intersect_packet: more rays than a packet holds");
     if (!packets_supported()) throw std::logic_error("EmbreeScene::intersect_packet: this scene cannot take packets");
+    if (n == 0) return;
     PacketContext pc;
     RTCIntersectContext& ctx = pc.ctx;
     rtcInitIntersectContext(&ctx);
@@ -222,17 +223,26 @@ void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidat
     }
     alignas(64) int valid[kPacket];
     alignas(64) RTCRayHit16 rh;
+    // Each lane exactly as make_rayhit rounds a single ray; the unused lanes (invalid) repeat
+    // the first. Fixed-count loops, which the compiler turns into whole-vector stores.
+    for (int i = 0; i < n; ++i) {
+        rh.ray.org_x[i] = static_cast<float>(o[i].x);
+        rh.ray.org_y[i] = static_cast<float>(o[i].y);
+        rh.ray.org_z[i] = static_cast<float>(o[i].z);
+        rh.ray.dir_x[i] = static_cast<float>(d[i].x);
+        rh.ray.dir_y[i] = static_cast<float>(d[i].y);
+        rh.ray.dir_z[i] = static_cast<float>(d[i].z);
+    }
+    for (int i = n; i < kPacket; ++i) {
+        rh.ray.org_x[i] = rh.ray.org_x[0];
+        rh.ray.org_y[i] = rh.ray.org_y[0];
+        rh.ray.org_z[i] = rh.ray.org_z[0];
+        rh.ray.dir_x[i] = rh.ray.dir_x[0];
+        rh.ray.dir_y[i] = rh.ray.dir_y[0];
+        rh.ray.dir_z[i] = rh.ray.dir_z[0];
+    }
     for (int i = 0; i < kPacket; ++i) {
         valid[i] = i < n ? -1 : 0;
-        // Each lane exactly as make_rayhit rounds a single ray.
-        const Vec3& a = o[i < n ? i : 0];
-        const Vec3& b = d[i < n ? i : 0];
-        rh.ray.org_x[i] = static_cast<float>(a.x);
-        rh.ray.org_y[i] = static_cast<float>(a.y);
-        rh.ray.org_z[i] = static_cast<float>(a.z);
-        rh.ray.dir_x[i] = static_cast<float>(b.x);
-        rh.ray.dir_y[i] = static_cast<float>(b.y);
-        rh.ray.dir_z[i] = static_cast<float>(b.z);
         rh.ray.tnear[i] = 0.0f;
         rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
         rh.ray.mask[i] = kTriangleMask;
