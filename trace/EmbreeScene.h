@@ -45,12 +45,15 @@ public:
         double until[kPacket];
     };
     void intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip = nullptr) const;
-    // Any number of rays with nothing to skip (camera rays), out[i] exactly intersect_packet's
-    // answer for ray i. Embree's packet traversal takes the rays of one octant (the signs of the
-    // direction's components) at a time, and a pixel's camera rays, spread about the axis by the
-    // aperture, fall into four: a packet of one pixel's 16 samples is four traversals of about
-    // four rays. Here the rays are regrouped by octant first, sixteen of one octant to a packet
-    // (the remainders pooled), so several packets' worth of a pixel's samples fill the lanes.
+    // Any number of rays with nothing to skip (camera rays), out[i] the packet query's answer for
+    // ray i: the single query's, as intersect_packet's is (tests/trace_packets.cpp), but for a
+    // ray through an edge between two facets, which either may take depending on the rays that
+    // share its packet (the grouping is fixed by the rays, so results are too). Embree's packet
+    // traversal takes the rays of one octant (the signs of the direction's components) at a time,
+    // and a pixel's camera rays, spread about the axis by the aperture, fall into four: a packet
+    // of one pixel's 16 samples is four traversals of about four rays. Here the rays are
+    // regrouped by octant first, sixteen of one octant to a packet (the remainders pooled), so
+    // several packets' worth of a pixel's samples fill the lanes.
     void intersect_coherent(const Vec3* o, const Vec3* d, int n, Candidate* out) const;
     // Whether this Embree build honours ray masks (RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED),
     // without which a packet would reach the patches' single-ray callback.
