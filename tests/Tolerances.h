@@ -27,6 +27,13 @@ inline double volume_bound(double object_error, double object_area, double defec
 // (relative eps, doubled for the distance evaluation).
 inline double face_on_surface(double chord_error, double scale) { return chord_error + 4.0 * kEps * scale; }
 
+// cos_sin_turns(u) against cos(2 pi u) and sin(2 pi u) (trace/SinCos.h derives it): the quarter
+// turns are exact, the reduced angle x = (pi / 2) r (|x| <= pi / 4) carries two roundings (the
+// product and pi / 2's own), at most 2 (eps / 2) |x| <= 0.79 eps of angle, and fdlibm's kernels
+// add their approximation error (2^-58) and under an ulp of evaluation: 0.79 + 0.5 + 0.03 below
+// 1.5 eps; 1.5 eps = 3 x 2^-53 in absolute terms, both results being at most 1.
+constexpr double kTurnCosSin = 1.5 * kEps;
+
 // Exported mesh files (geometry/MeshExport.h) hold float32 coordinates: OpenMesh rounds each double
 // to the nearest float when writing (ASCII is printed with 9 significant digits, float's
 // max_digits10, so it holds the same float). Rounding to nearest binary32 moves x by at most half

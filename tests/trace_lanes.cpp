@@ -24,6 +24,7 @@
 #include "trace/Optics.h"
 #include "trace/Patch.h"
 #include "trace/Rng.h"
+#include "trace/SinCos.h"
 
 using namespace ltm;
 using lanes::kLanes;
@@ -236,6 +237,30 @@ TEST(Lanes, HelpersFollowTheStandardLibrary) {
     }
 }
 
+// The camera azimuth's twin (lanes::cos_sin_turns) against the scalar cos_sin_turns, bit for bit:
+// every quarter turn's swap and signs, the reduction's ties (odd multiples of 1/8), the largest
+// remainders beside them, tiny and negative u, non-finite u, and random draws.
+TEST(Lanes, CosSinTurnsIsTheScalars) {
+    std::vector<double> us = {0.0, -0.0, 0.25, 0.5, 0.75, 1.0, -0.25, 1e-300, -1e-300, 3.5, INFINITY, NAN};
+    for (int k = 0; k <= 16; ++k) {
+        us.push_back(k / 16.0);
+        us.push_back(std::nextafter(k / 16.0, 0.0));
+        us.push_back(std::nextafter(k / 16.0, 1.0));
+    }
+    std::mt19937_64 g(5);
+    for (int i = 0; i < 4096; ++i) us.push_back(static_cast<double>(g() >> 11) * 0x1.0p-53);
+    for (size_t at = 0; at < us.size(); at += kLanes) {
+        lanes::Real u = lanes::splat(0.5);
+        for (int j = 0; j < kLanes && at + static_cast<size_t>(j) < us.size(); ++j) u[j] = us[at + static_cast<size_t>(j)];
+        const lanes::CosSin got = lanes::cos_sin_turns(u);
+        for (int j = 0; j < kLanes; ++j) {
+            const CosSin want = cos_sin_turns(u[j]);
+            ASSERT_TRUE(same_bits(got.cos[j], want.cos)) << "u = " << u[j];
+            ASSERT_TRUE(same_bits(got.sin[j], want.sin)) << "u = " << u[j];
+        }
+    }
+}
+
 // The kernels of every instruction set this processor runs (AVX-512, AVX2, the baseline) give the
 // same bits on the same packets: the nearest patch roots, hit points, normals and offsets of rays
 // through every kind of lens with ellipsoids in it, facet candidates refined on the caps, and
@@ -326,11 +351,11 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
     EXPECT_GT(refined_scalar, 0);
 }
 
-// The camera's streams in lanes (lanes::seed_streams, lanes::uniform in the camera_draws kernel)
-// against Rng itself: for every sample, the stream after Rng(seed, k, s)'s first four uniforms,
-// on every instruction set, for seeds and pixels at the ends of their ranges (the hash of
-// k + kStreamA wraps) and for samples past 2^32; and both camera kernels of every set giving the
-// baseline's bits (the rays against TelecentricCamera::sample: the next test).
+// The camera's streams in lanes (lanes::seed_streams, lanes::uniform in the camera kernel) against
+// Rng itself: for every sample, the stream after Rng(seed, k, s)'s first four uniforms, on every
+// instruction set, for seeds and pixels at the ends of their ranges (the hash of k + kStreamA
+// wraps) and for samples past 2^32; and the camera kernel of every set giving the baseline's bits
+// (the rays against TelecentricCamera::sample: the next test).
 TEST(Lanes, CameraStreamsAreRngsStreams) {
     const std::uint64_t seeds[] = {0, 1, 42, 0xffffffffffffffffull};
     const std::uint64_t pixels[] = {0, 7, 99999, 0xffffffffffffffffull - 3};
@@ -359,13 +384,9 @@ TEST(Lanes, CameraStreamsAreRngsStreams) {
                     in.sample[j] = first + static_cast<std::uint64_t>(j);
                     in.stratum_x[j] = std::floor(u(g) * in.strata);
                     in.stratum_y[j] = std::floor(u(g) * in.strata);
-                    // The caller's cosine and sine, any finite values for this comparison.
-                    in.cos_phi[j] = u(g) * 2 - 1;
-                    in.sin_phi[j] = u(g) * 2 - 1;
                 }
                 lanes::CameraLanes want = in;
-                sets.back()->camera_draws(want, lanes::kRays);
-                sets.back()->camera_rays(want, lanes::kRays);
+                sets.back()->camera(want, lanes::kRays);
                 for (int j = 0; j < lanes::kRays; ++j) {
                     Rng rng(seed, pixel, first + static_cast<std::uint64_t>(j));
                     for (int i = 0; i < 4; ++i) rng.uniform();
@@ -374,8 +395,7 @@ TEST(Lanes, CameraStreamsAreRngsStreams) {
                 }
                 for (const lanes::Kernels* k : sets) {
                     lanes::CameraLanes got = in;
-                    k->camera_draws(got, lanes::kRays);
-                    k->camera_rays(got, lanes::kRays);
+                    k->camera(got, lanes::kRays);
                     ASSERT_EQ(std::memcmp(&got, &want, sizeof got), 0) << k->isa;
                 }
             }

@@ -1,13 +1,15 @@
 // Interface optics and exact intersections against closed forms (Hecht, Optics, 5th ed., 4.6).
 #include <gtest/gtest.h>
 
-#include <cmath>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <random>
 
 #include "tests/Tolerances.h"
 #include "trace/Intersect.h"
 #include "trace/Optics.h"
+#include "trace/SinCos.h"
 
 using namespace ltm;
 
@@ -130,4 +132,38 @@ TEST(Intersect, ErrorBoundCoversTheComputedPoint) {
             EXPECT_LT(e, 1e-12 * scale * 100);
         }
     }
+}
+
+// The camera's azimuth (trace/SinCos.h): cos(2 pi u) and sin(2 pi u) against long double, within
+// the bound derived there, for random u in [0, 1) (the camera's draws, 53-bit multiples of 2^-53),
+// at the quarter and eighth turns and their neighbouring doubles (the reduction's rounding ties and
+// its largest remainders), and for tiny u; and exact at the quarter turns.
+TEST(SinCos, TurnsWithinTheirBoundOfLongDouble) {
+    const long double two_pi = 6.283185307179586476925286766559005768L;
+    double worst = 0;
+    auto check = [&](double u) {
+        const CosSin got = cos_sin_turns(u);
+        const long double a = two_pi * static_cast<long double>(u);
+        const double ec = static_cast<double>(std::fabs(static_cast<long double>(got.cos) - std::cos(a)));
+        const double es = static_cast<double>(std::fabs(static_cast<long double>(got.sin) - std::sin(a)));
+        worst = std::max({worst, ec, es});
+        ASSERT_LE(ec, tol::kTurnCosSin) << "u = " << u;
+        ASSERT_LE(es, tol::kTurnCosSin) << "u = " << u;
+    };
+    std::mt19937_64 g(20261204);
+    for (int i = 0; i < 2000000; ++i) check(static_cast<double>(g() >> 11) * 0x1.0p-53);
+    for (int k = 0; k <= 16; ++k) {
+        const double u = k / 16.0;
+        check(u);
+        check(std::nextafter(u, 0.0));
+        check(std::nextafter(u, 1.0));
+    }
+    for (double u = 1e-300; u < 1; u *= 3.7) check(u);
+    EXPECT_GT(worst, 0.0);  // the comparison saw rounding, so it could see more
+    for (int k = 0; k < 4; ++k) {
+        const CosSin q = cos_sin_turns(k / 4.0);
+        EXPECT_EQ(q.cos, (k == 0) - (k == 2)) << k;
+        EXPECT_EQ(q.sin, (k == 1) - (k == 3)) << k;
+    }
+    EXPECT_TRUE(std::isnan(cos_sin_turns(NAN).cos) && std::isnan(cos_sin_turns(INFINITY).sin));
 }

@@ -14,7 +14,7 @@ void TelecentricCamera::sample_packet(long k, int s0, int n, const std::vector<i
     if (n == 0) return;
     // Rng(seed, k, s) hashes the seed and k the same way for every sample of the pixel: that part
     // once, the streams, their draws and the rays' arithmetic in lanes (lanes::seed_streams,
-    // lanes::uniform; sample_from's operations in its order), the cosine and sine per sample.
+    // lanes::uniform; sample_from's operations in its order).
     lanes::CameraLanes c;
     c.key = splitmix64(seed) ^ splitmix64(static_cast<std::uint64_t>(k) + Rng::kStreamA);
     c.strata = grid_ > 0 ? grid_ : spp_;
@@ -37,18 +37,7 @@ void TelecentricCamera::sample_packet(long k, int s0, int n, const std::vector<i
         c.stratum_x[i] = grid_ > 0 ? s % grid_ : s;
         c.stratum_y[i] = grid_ > 0 ? s / grid_ : perm[static_cast<size_t>(s)];
     }
-    kernels.camera_draws(c, count);
-    for (int i = 0; i < count; ++i) {
-        const int j = std::min(i, n - 1);
-        if (i == j) {
-            c.cos_phi[i] = std::cos(c.phi[i]);
-            c.sin_phi[i] = std::sin(c.phi[i]);
-        } else {
-            c.cos_phi[i] = c.cos_phi[j];
-            c.sin_phi[i] = c.sin_phi[j];
-        }
-    }
-    kernels.camera_rays(c, count);
+    kernels.camera(c, count);
     for (int i = 0; i < n; ++i) {
         origin[i] = c.origin.get(i);
         dir[i] = c.dir.get(i);

@@ -15,6 +15,7 @@
 #include "geometry/Vec3.h"
 #include "scene/Scene.h"
 #include "trace/Rng.h"
+#include "trace/SinCos.h"
 
 namespace ltm {
 
@@ -62,7 +63,7 @@ public:
     }
     // Samples s0, ..., s0 + n - 1 of pixel k (n <= 16) with their streams: rng[i] is
     // Rng(seed, k, s0 + i) after sample() took its draws, origin[i] and dir[i] what sample() gives,
-    // bit for bit. Computed in SIMD lanes, the azimuth's cosine and sine apart (trace/Camera.cpp).
+    // bit for bit. Computed in SIMD lanes (trace/Camera.cpp).
     void sample_packet(long k, int s0, int n, const std::vector<int>& perm, std::uint64_t seed, Rng* rng,
                        Vec3* origin, Vec3* dir) const;
     // Sample s from its four draws u (sample's arithmetic).
@@ -78,9 +79,10 @@ public:
         }
         const double x = -0.5 * width_ + (n + fx) * width_ / N_;
         const double y = 0.5 * height_ - (m + fy) * height_ / M_;
-        const double r = na_ * std::sqrt(u[2]), phi = 2.0 * kPi * u[3];
-        const double sx = r * std::cos(phi), sy = r * std::sin(phi);
-        dir = {sx, sy, std::sqrt((1.0 - r) * (1.0 + r))};
+        // The azimuth 2 pi u[3]'s cosine and sine by the function a SIMD lane repeats bit for bit.
+        const double r = na_ * std::sqrt(u[2]);
+        const CosSin phi = cos_sin_turns(u[3]);
+        dir = {r * phi.cos, r * phi.sin, std::sqrt((1.0 - r) * (1.0 + r))};
         const Vec3 focus{x, y, focus_z_};
         origin = focus - dir * ((focus_z_ - start_z_) / dir.z);
     }

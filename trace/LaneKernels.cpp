@@ -227,28 +227,21 @@ void spawn_lanes(InteractLanes& a, int count, double skip_floor) {
 
 
 
-void camera_draws(CameraLanes& c, int count) {
+void camera(CameraLanes& c, int count) {
     for (int at = 0; at < count; at += kLanes) {
         Streams r = seed_streams(c.key, load(c.sample + at));
         const Real u0 = uniform(r), u1 = uniform(r), u2 = uniform(r), u3 = uniform(r);
         store(c.state + at, r.state);
         store(c.inc + at, r.inc);
-        // TelecentricCamera::sample_from, up to the azimuth's cosine and sine.
+        // TelecentricCamera::sample_from.
         const Real strata = splat(c.strata);
         const Real fx = (load(c.stratum_x + at) + u0) / strata, fy = (load(c.stratum_y + at) + u1) / strata;
-        store(c.x + at, splat(c.half_width) + (splat(c.column) + fx) * splat(c.width) / splat(c.columns));
-        store(c.y + at, splat(c.half_height) - (splat(c.row) + fy) * splat(c.height) / splat(c.rows));
-        store(c.r + at, splat(c.na) * sqrt(u2));
-        store(c.phi + at, splat(2.0 * kPi) * u3);
-    }
-}
-
-void camera_rays(CameraLanes& c, int count) {
-    for (int at = 0; at < count; at += kLanes) {
-        // The rest of TelecentricCamera::sample_from.
-        const Real r = load(c.r + at);
-        const V3 dir{r * load(c.cos_phi + at), r * load(c.sin_phi + at), sqrt((splat(1.0) - r) * (splat(1.0) + r))};
-        const V3 focus{load(c.x + at), load(c.y + at), splat(c.focus_z)};
+        const Real x = splat(c.half_width) + (splat(c.column) + fx) * splat(c.width) / splat(c.columns);
+        const Real y = splat(c.half_height) - (splat(c.row) + fy) * splat(c.height) / splat(c.rows);
+        const Real rr = splat(c.na) * sqrt(u2);
+        const CosSin phi = cos_sin_turns(u3);
+        const V3 dir{rr * phi.cos, rr * phi.sin, sqrt((splat(1.0) - rr) * (splat(1.0) + rr))};
+        const V3 focus{x, y, splat(c.focus_z)};
         store(c.origin, at, focus - dir * (splat(c.depth) / dir.z));
         store(c.dir, at, dir);
     }
@@ -258,12 +251,12 @@ void camera_rays(CameraLanes& c, int count) {
 
 #if defined(__AVX512F__)
 const Kernels* kernels_x86_64_v4() {
-    static const Kernels k{"x86-64-v4", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera_draws, camera_rays};
+    static const Kernels k{"x86-64-v4", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera};
     return &k;
 }
 #elif defined(__AVX2__)
 const Kernels* kernels_x86_64_v3() {
-    static const Kernels k{"x86-64-v3", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera_draws, camera_rays};
+    static const Kernels k{"x86-64-v3", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera};
     return &k;
 }
 #else
@@ -274,7 +267,7 @@ const Kernels* kernels_x86_64_v3();
 #endif
 
 std::vector<const Kernels*> runnable_kernels() {
-    static const Kernels baseline{"baseline", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera_draws, camera_rays};
+    static const Kernels baseline{"baseline", kLanes, analytic_segments, refine_segments, fresnel_lanes, spawn_lanes, camera};
     std::vector<const Kernels*> out;
 #if defined(LTM_LANE_KERNELS_X86)
     // The features the AVX-512 and AVX2 builds are compiled with (CMakeLists.txt).

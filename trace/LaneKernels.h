@@ -98,11 +98,10 @@ struct RefineLanes {
     alignas(64) std::int64_t scalar[kRays];   // set: the lane needs Tracer::refined_hit itself
 };
 
-// The camera's samples of one pixel (TelecentricCamera::sample_packet), in two halves around the
-// cosine and sine of each direction's azimuth (the C library's, per lane). For each sample s:
-// the stream Rng(seed, k, s), its first four uniforms (TelecentricCamera::sample's, in its order)
-// and the stream after them, where the sample's path goes on drawing; then sample_from's
-// arithmetic for the ray.
+// The camera's samples of one pixel (TelecentricCamera::sample_packet). For each sample s: the
+// stream Rng(seed, k, s), its first four uniforms (TelecentricCamera::sample's, in its order) and
+// the stream after them, where the sample's path goes on drawing; then sample_from's arithmetic
+// for the ray, the azimuth's cosine and sine included (cos_sin_turns, trace/SinCos.h).
 struct CameraLanes {
     // in: the pixel and the camera (TelecentricCamera's members, converted as sample_from converts them)
     std::uint64_t key = 0;        // splitmix64(seed) ^ splitmix64(k + Rng::kStreamA)
@@ -113,12 +112,9 @@ struct CameraLanes {
     double na = 0, focus_z = 0, depth = 0;   // na_, focus_z_, focus_z_ - start_z_
     alignas(64) std::uint64_t sample[kRays];  // ... s
     alignas(64) double stratum_x[kRays], stratum_y[kRays];  // ... its strata (s % grid_, s / grid_ or s, perm[s])
-    // camera_draws: the streams after the four draws (Rng::from_state), the focus point's x and y,
-    // the direction sine's length r and azimuth phi.
+    // out: the streams after the four draws (Rng::from_state) and the ray.
     alignas(64) std::uint64_t state[kRays], inc[kRays];
-    alignas(64) double x[kRays], y[kRays], r[kRays], phi[kRays];
-    alignas(64) double cos_phi[kRays], sin_phi[kRays];  // in (the caller): std::cos(phi), std::sin(phi)
-    Vec3s origin, dir;                                  // camera_rays: the ray
+    Vec3s origin, dir;
 };
 
 // One instruction set's kernels.
@@ -132,9 +128,8 @@ struct Kernels {
     void (*fresnel)(InteractLanes& a, int count);
     // The chosen direction normalized and the new ray spawned (Tracer::interact's spawn).
     void (*spawn)(InteractLanes& a, int count, double skip_floor);
-    // TelecentricCamera::sample_packet's halves (CameraLanes).
-    void (*camera_draws)(CameraLanes& c, int count);
-    void (*camera_rays)(CameraLanes& c, int count);
+    // TelecentricCamera::sample_packet (CameraLanes).
+    void (*camera)(CameraLanes& c, int count);
     // The lanes to run for n rays: whole vectors.
     int count(int n) const { return (n + lanes - 1) / lanes * lanes; }
 };

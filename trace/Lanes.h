@@ -29,6 +29,7 @@
 #include "trace/Optics.h"
 #include "trace/Patch.h"
 #include "trace/Rng.h"
+#include "trace/SinCos.h"
 #include "trace/TraceTolerance.h"
 
 #if defined(__AVX512F__)
@@ -246,6 +247,29 @@ LTM_LANE Fresnel fresnel(const Real& cos_i_in, const Real& eta) {
 LTM_LANE V3 reflect(const V3& d, const V3& n) { return d - n * (splat(2.0) * dot(d, n)); }
 LTM_LANE V3 refract(const V3& d, const V3& n, const Real& eta, const Real& cos_i, const Real& cos_t) {
     return d * eta + n * (eta * cos_i - cos_t);
+}
+
+// ---- The camera's azimuth (trace/SinCos.h) --------------------------------------------------------
+// cos_sin_turns(u): the same operations, the quarter turn's swap and signs as selects.
+struct CosSin {
+    Real cos, sin;
+};
+LTM_LANE CosSin cos_sin_turns(const Real& u) {
+    using namespace ltm::sincos_detail;
+    const Real q = splat(4.0) * u;
+    const Real shifted = q + splat(kRoundInteger);
+    const Real k = shifted - splat(kRoundInteger);
+    const Real x = (q - k) * splat(kHalfPi);
+    const Real z = x * x;
+    const Real sr = splat(S2) + z * (splat(S3) + z * (splat(S4) + z * (splat(S5) + z * splat(S6))));
+    const Real s = x + z * x * (splat(S1) + z * sr);
+    const Real cr = z * (splat(C1) + z * (splat(C2) + z * (splat(C3) + z * (splat(C4) + z * (splat(C5) + z * splat(C6))))));
+    const Real hz = splat(0.5) * z, w = splat(1.0) - hz;
+    const Real c = w + (((splat(1.0) - w) - hz) + z * cr);
+    const Mask quarter = as_bits(shifted) & 3;  // k mod 4, as the scalar reads it
+    const Mask odd = (quarter & 1) != 0, neg_cos = ((quarter + 1) & 2) != 0, neg_sin = (quarter & 2) != 0;
+    const Real a = select(odd, s, c), b = select(odd, c, s);
+    return {select(neg_cos, -a, a), select(neg_sin, -b, b)};
 }
 
 // ---- Random numbers (trace/Rng.h) -------------------------------------------------------------------

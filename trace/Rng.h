@@ -39,7 +39,7 @@ public:
     // The stream of state 0 and increment 1, for arrays of streams each assigned before its first draw.
     Rng() = default;
     // The stream whose next draw follows `state` (with increment `inc`, odd): where a SIMD twin of
-    // this class (trace/LaneKernels.h, camera_draws) left a stream it drew from.
+    // this class (trace/LaneKernels.h, the camera kernel) left a stream it drew from.
     static Rng from_state(std::uint64_t state, std::uint64_t inc) {
         Rng r;
         r.state_ = state;
