@@ -221,12 +221,11 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
     // Lanes the SIMD halves take: an optical interface between straight media, a finite hit, no
     // roulette yet, packed into the kernels' lanes as they are found. The rest interact alone,
     // before anything of theirs changes here.
-    const SurfaceTable& table = solid_.surfaces;
     const bool mesh_only = options_.representation == Representation::MeshOnly;
     lanes::InteractLanes a;
     int lane_of[lanes::kRays];  // lanes of the kernels: ids[k] for k = lane_of[j]
     Medium to[lanes::kRays];
-    const SurfaceInfo* surface[lanes::kRays];
+    const LaneFace* face[lanes::kRays];
     int n = 0;
     for (int j = 0; j < m; ++j) {
         const int i = ids[j];
@@ -236,27 +235,29 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         bool simple = hh.found & !hh.repaired & !hh.lost & (s.depth + 1 < options_.rr_depth);
         simple = simple && (is_finite(hh.p) & is_finite(hh.n_out) & is_finite(hh.d_in) & std::isfinite(hh.n_from));
         if (simple) {
-            const SurfaceInfo& sf = table[hh.tag];
             const bool in = dot(hh.d_in, hh.n_out) < 0;
-            Medium t = in ? sf.inside : sf.outside;
-            if (t == Medium::Glass && sf.defect < 0)  // as interact: a face where an inclusion reaches it
+            const LaneFace& f = lane_faces_[2 * static_cast<size_t>(hh.tag) + in];
+            Medium t = f.to;
+            double n_to = f.n_to;
+            simple = f.simple;
+            if (f.inclusions) {  // as interact: a face where an inclusion reaches it
                 for (int k : face_inclusions_)
                     if (scene_.defects[static_cast<size_t>(k)].segment_min_rho2(hh.p, hh.p) < 1.0) t = Medium::inclusion(k);
-            const MediumInfo& into = (*media_)[t];
-            simple = sf.optical && t != Medium::Absorber &&
-                     !(sf.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) &&
-                     into.propagation == Propagation::Straight;
+                const MediumInfo& into = (*media_)[t];
+                simple = simple && into.propagation == Propagation::Straight;
+                n_to = into.index;
+            }
             if (simple) {
                 a.d_in.set(n, hh.d_in);
                 a.n_out.set(n, hh.n_out);
                 a.p.set(n, hh.p);
                 a.offset[n] = hh.offset;
                 a.n_from[n] = hh.n_from;
-                a.n_to[n] = into.index;  // index_at of a straight medium
+                a.n_to[n] = n_to;  // index_at of a straight medium
                 a.entering[n] = in ? -1 : 0;
                 a.skip_chord[n] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
                 to[n] = t;
-                surface[n] = &sf;
+                face[n] = &f;
                 lane_of[n++] = j;
                 continue;
             }
@@ -288,18 +289,18 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         const Hit& hh = h[i];
         State& s = st[i];
         PathStats& ps = stats[i];
-        const SurfaceInfo& sf = *surface[j];
+        const LaneFace& f = *face[j];
         ++ps.segments;
         if (s.defect < 0) {  // as interact
             const int k = s.medium.defect();
             if (k >= 0 && scene_.defects[static_cast<size_t>(k)].segment_min_rho2(s.o, hh.p) < 1.0) s.defect = k;
-            else if (sf.defect >= 0) s.defect = sf.defect;
+            else if (f.defect >= 0) s.defect = f.defect;
         }
         if (a.reflect[j]) {
             if (!a.tir[j]) ++ps.reflections;
         } else {
-            const Medium from = a.entering[j] ? sf.outside : sf.inside;
-            s.escaped = convex_ && !mesh_only && sf.defect < 0 && from == Medium::Glass && to[j] == Medium::Air;
+            // to[j] is f.to but where an inclusion reaches the face, never the air there.
+            s.escaped = f.escapes && to[j] == Medium::Air;
             s.medium = to[j];
             ++ps.transmissions;
         }

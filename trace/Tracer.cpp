@@ -189,6 +189,25 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
                      std::all_of(object_patches_.begin(), object_patches_.end(), lanes::lane_patch);
     face_normals_.resize(tri_mesh_.num_triangles());
     for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
+    // interact's rules per surface and side, for lanes_interact.
+    lane_faces_.resize(2 * solid_.surfaces.size());
+    for (size_t tag = 0; tag < solid_.surfaces.size(); ++tag) {
+        const SurfaceInfo& sf = solid_.surfaces[static_cast<int>(tag)];
+        for (int entering = 0; entering < 2; ++entering) {
+            LaneFace& f = lane_faces_[2 * tag + static_cast<size_t>(entering)];
+            f.from = entering ? sf.outside : sf.inside;
+            f.to = entering ? sf.inside : sf.outside;
+            f.defect = sf.defect;
+            f.inclusions = f.to == Medium::Glass && sf.defect < 0 && !face_inclusions_.empty();
+            const MediumInfo& into = (*media_)[f.to];
+            f.n_to = into.index;
+            f.simple = sf.optical && f.to != Medium::Absorber &&
+                       !(sf.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) &&
+                       into.propagation == Propagation::Straight;
+            f.escapes = convex_ && options_.representation != Representation::MeshOnly && sf.defect < 0 &&
+                        f.from == Medium::Glass && f.to == Medium::Air;
+        }
+    }
 }
 
 Tracer::~Tracer() = default;
@@ -449,19 +468,6 @@ Tracer::Hit Tracer::mesh_only_hit(const State& st, PathStats& stats, const Candi
     Hit h;  // one named record on every return (see propagate)
     if (c.hit) mesh_only_record(o, d, c, h);
     return h;
-}
-
-void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const {
-    h.found = true;
-    h.t = c.t;
-    h.tag = c.tag;
-    h.prim = c.prim;
-    h.triangle = true;
-    h.p = o + d * c.t;
-    h.n_out = face_normals_[c.prim];
-    // The float hit's error: a few float ulps of the coordinates involved.
-    const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
-    h.offset = trace_tol::kMeshOnlyOffsetUlps * kFloatUlp * mag;
 }
 
 bool Tracer::packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const {
@@ -1092,29 +1098,6 @@ void Tracer::sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& r
         if (pending.size == 0) return;
         st = pending.items[static_cast<size_t>(--pending.size)];
     }
-}
-
-PathResult Tracer::branch_result(const State& st, PathStats& stats) const {
-    ++stats.branches;
-    PathResult r;
-    r.defect = st.defect;
-    r.random_choices = st.random_choices;
-    if (st.weight == 0) return r;
-    if (st.d.z <= 0) {
-        ++stats.toward_camera;
-        return r;
-    }
-    const double t = (display_.z - st.o.z) / st.d.z;
-    const long l = t > 0 ? display_.pixel(st.o.x + t * st.d.x, st.o.y + t * st.d.y) : -1;
-    if (l < 0) {
-        ++stats.off_display;
-        return r;
-    }
-    ++stats.on_display;
-    stats.display_weight += st.weight;
-    r.pixel = l;
-    r.weight = st.weight;
-    return r;
 }
 
 }  // namespace ltm

@@ -335,6 +335,8 @@ private:
     bool lockstep_ = false;  // ... and whole paths side by side (lockstep())
     bool analytic_lanes_ = false;  // analytic lockstep: every object patch has SIMD twins (trace/Lanes.h)
     bool refined_lanes_ = false;   // refined lockstep refines cap facets in SIMD (no cutting defect)
+    struct LaneFace;  // a surface from one side, as lanes_interact reads it (TracerState.h)
+    std::vector<LaneFace> lane_faces_;  // 2 tag + entering
 };
 
 }  // namespace ltm

@@ -1,12 +1,16 @@
 #pragma once
 // The tracer's per-path records, private to trace/: the hit record that a medium's propagation
 // step returns (Tracer::Hit), a path's state between interfaces (Tracer::State) and the split
-// estimator's pending branches (Tracer::SplitStack). Shared by Tracer.cpp (one path at a time) and
-// Lockstep.cpp (a packet's paths side by side); nothing outside trace/ includes it.
+// estimator's pending branches (Tracer::SplitStack), the lockstep's view of a surface
+// (Tracer::LaneFace), and two small steps every path takes (mesh_only_record, branch_result).
+// Shared by Tracer.cpp (one path at a time) and Lockstep.cpp (a packet's paths side by side);
+// nothing outside trace/ includes it.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 
+#include "trace/TraceTolerance.h"
 #include "trace/Tracer.h"
 
 namespace ltm {
@@ -50,6 +54,22 @@ struct Tracer::State {
     int random_choices = 0;  // PathResult::random_choices
 };
 
+// What the lockstep interaction (Tracer::lanes_interact) needs of a surface crossed from one
+// side, read from one small record instead of the surface table and the media table: for tag and
+// `entering` (the ray crosses from the surface's outside to its inside), lane_faces_[2 tag +
+// entering]. Filled once by the constructor from those tables, by interact's rules.
+struct Tracer::LaneFace {
+    Medium from = Medium::Air, to = Medium::Air;  // the media before and after a transmission
+    double n_to = 1;      // the index of `to` (a straight medium's constant; unused otherwise)
+    int defect = -1;      // SurfaceInfo::defect
+    // The SIMD step applies: an optical surface, not an absorbing rim, `to` neither the absorber
+    // nor a curved medium. (Where a smooth inclusion can reach the face, `inclusions` says that
+    // `to` depends on the point: lanes_interact decides it there as interact does.)
+    bool simple = false;
+    bool inclusions = false;
+    bool escapes = false;  // a transmission here leaves a convex object (State::escaped)
+};
+
 // The branches of a split camera sample that wait to be traced, depth first. Capacity: a split
 // pushes its reflected branch with one split fewer left than the branch had and the traced
 // branch continues with as many, so from bottom to top the stack holds strictly decreasing
@@ -59,5 +79,48 @@ struct Tracer::SplitStack {
     std::array<State, kMaxSplitDepth> items;
     int size = 0;
 };
+
+// Two small steps that both the path-at-a-time tracer (Tracer.cpp) and the lockstep one
+// (Lockstep.cpp) take for every path, defined here so that each inlines them: the record is then
+// written once where it lives (a returned PathResult copied into the results, or a Hit reset
+// before its fields are set, was a store reloaded and a stall; perf).
+
+// mesh_only_hit's record of a triangle hit.
+inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const {
+    h.found = true;
+    h.t = c.t;
+    h.tag = c.tag;
+    h.prim = c.prim;
+    h.triangle = true;
+    h.p = o + d * c.t;
+    h.n_out = face_normals_[c.prim];
+    // The float hit's error: a few float ulps of the coordinates involved.
+    const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
+    h.offset = trace_tol::kMeshOnlyOffsetUlps * trace_tol::kFloatUlp * mag;
+}
+
+// Where an ended branch lands on the display (weight 0 or off the display: pixel -1).
+inline PathResult Tracer::branch_result(const State& st, PathStats& stats) const {
+    ++stats.branches;
+    PathResult r;
+    r.defect = st.defect;
+    r.random_choices = st.random_choices;
+    if (st.weight == 0) return r;
+    if (st.d.z <= 0) {
+        ++stats.toward_camera;
+        return r;
+    }
+    const double t = (display_.z - st.o.z) / st.d.z;
+    const long l = t > 0 ? display_.pixel(st.o.x + t * st.d.x, st.o.y + t * st.d.y) : -1;
+    if (l < 0) {
+        ++stats.off_display;
+        return r;
+    }
+    ++stats.on_display;
+    stats.display_weight += st.weight;
+    r.pixel = l;
+    r.weight = st.weight;
+    return r;
+}
 
 }  // namespace ltm
