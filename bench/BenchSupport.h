@@ -20,20 +20,51 @@
 
 namespace ltm::bench {
 
-// The options every benchmark program takes: --threads N --reps R --out DIR --quick --samples S.
+// The options every benchmark program takes: --threads N --reps R --out DIR --quick --samples S
+// (--ltm PATH: bench_npz's input). --help prints them; anything else, or a missing or non-positive
+// number, exits with status 2 naming the argument, before any work: a mistyped flag must not run a
+// long benchmark with its defaults, or write its CSV files into the current folder.
 struct Args {
     int threads = 2, reps = 3;
     std::string out = ".";
     bool quick = false;
     long samples = 16;
+    std::string ltm;
 };
+
 inline Args parse_args(int argc, char** argv, Args a = {}) {
+    const auto usage = [&](std::FILE* to) {
+        std::fprintf(to, "usage: %s [--quick] [--threads N] [--reps N] [--samples N] [--out DIR] [--ltm PATH]\n",
+                     argv[0]);
+    };
+    const auto fail = [&](const char* what, const char* arg) {
+        std::fprintf(stderr, "%s: %s: %s\n", argv[0], what, arg);
+        usage(stderr);
+        std::exit(2);
+    };
+    const auto value = [&](int& i) -> const char* {
+        if (i + 1 >= argc) fail("missing value for", argv[i]);
+        return argv[++i];
+    };
+    const auto positive = [&](int& i) -> long {
+        const char* text = value(i);
+        char* end = nullptr;
+        const long v = std::strtol(text, &end, 10);
+        if (end == text || *end != '\0' || v <= 0 || v > 1000000000L) fail("not a positive integer", text);
+        return v;
+    };
     for (int i = 1; i < argc; ++i) {
-        if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) a.threads = std::atoi(argv[++i]);
-        else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) a.reps = std::atoi(argv[++i]);
-        else if (!std::strcmp(argv[i], "--out") && i + 1 < argc) a.out = argv[++i];
-        else if (!std::strcmp(argv[i], "--samples") && i + 1 < argc) a.samples = std::atol(argv[++i]);
-        else if (!std::strcmp(argv[i], "--quick")) a.quick = true;
+        const char* arg = argv[i];
+        if (!std::strcmp(arg, "--help") || !std::strcmp(arg, "-h")) {
+            usage(stdout);
+            std::exit(0);
+        } else if (!std::strcmp(arg, "--threads")) a.threads = static_cast<int>(positive(i));
+        else if (!std::strcmp(arg, "--reps")) a.reps = static_cast<int>(positive(i));
+        else if (!std::strcmp(arg, "--samples")) a.samples = positive(i);
+        else if (!std::strcmp(arg, "--out")) a.out = value(i);
+        else if (!std::strcmp(arg, "--ltm")) a.ltm = value(i);
+        else if (!std::strcmp(arg, "--quick")) a.quick = true;
+        else fail("unknown argument", arg);
     }
     return a;
 }

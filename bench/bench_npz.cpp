@@ -20,13 +20,11 @@
 namespace fs = std::filesystem;
 
 int main(int argc, char** argv) {
-    std::string ltm;
     ltm::bench::Args defaults;
     defaults.reps = 5;
     defaults.out.clear();
-    for (int i = 1; i + 1 < argc; ++i)
-        if (!std::strcmp(argv[i], "--ltm")) ltm = argv[i + 1];
     const ltm::bench::Args args = ltm::bench::parse_args(argc, argv, defaults);
+    const std::string& ltm = args.ltm;
     if (ltm.empty()) {
         std::fprintf(stderr, "usage: bench_npz --ltm PATH/ltm.npz [--reps R] [--out DIR]\n");
         return 2;
