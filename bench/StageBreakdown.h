@@ -21,7 +21,8 @@
 //   merge         the render's serial CSR assembly (RenderResult::merge_seconds, measured inside);
 //   loop          the rest of the render: the integrator loop around these stages (state, spawn,
 //                 roulette, statistics, the display hit, tbb), the render minus the stages above.
-// Writing (the ltm.npz archive, features, features.exr) is timed apart, per path of the render.
+// Computing the features from T, and writing (the ltm.npz archive, features.exr), are timed apart,
+// per path of the render.
 //
 // Replays are cyclic over the recorded workload (a spread of `record_pixels` pixels, every
 // sample's sampled path, exactly as the render draws it), so a stage's cost per item is the
@@ -43,7 +44,8 @@
 namespace ltm::bench {
 
 struct StageTimes {
-    double render = 0, camera = 0, intersection = 0, hit = 0, fresnel = 0, accumulate = 0, merge = 0, write = 0;
+    double render = 0, camera = 0, intersection = 0, hit = 0, fresnel = 0, accumulate = 0, merge = 0, features = 0,
+           write = 0;
     std::uint64_t paths = 0, segments = 0, interactions = 0;
     bool lockstep = false;  // the render traced paths side by side (Tracer::lockstep)
     double loop() const { return render - camera - intersection - hit - fresnel - accumulate - merge; }
@@ -209,15 +211,18 @@ inline StageTimes stage_breakdown(const Tracer& tracer, const Tracer& mesh_only,
         }
     });
 
-    // Writing: the archive, the features and their EXR (previews are timed by `ltmsim render
-    // --verbose`'s stages, not here).
+    // After the render, apart from it: computing the features from T, then writing the archive
+    // and the features' EXR (previews are timed by `ltmsim render --verbose`'s stages, not here).
     std::filesystem::create_directories(out_dir);
     const Display& disp = tracer.display();
+    FeatureImages f;
+    st.features = seconds_of(reps, [&] {
+        FeatureOptions fo;
+        f = compute_features(r.T, tracer.scene().camera.resolution[0], tracer.scene().camera.resolution[1],
+                             {disp.Q, disp.P, disp.width, disp.height}, fo);
+    });
     st.write = seconds_of(reps, [&] {
         write_ltm_npz(out_dir + "/ltm.npz", r.T);
-        FeatureOptions fo;
-        const FeatureImages f = compute_features(r.T, tracer.scene().camera.resolution[0], tracer.scene().camera.resolution[1],
-                                                 {disp.Q, disp.P, disp.width, disp.height}, fo);
         write_exr(out_dir + "/features.exr", f.width, f.height, f.channels);
     });
     std::filesystem::remove_all(out_dir);
@@ -236,6 +241,7 @@ inline void print_stage_breakdown(const char* repr, const StageTimes& s) {
                                                    {"accumulate", s.accumulate}, {"merge", s.merge},
                                                    {"loop", s.loop()}};
     for (const auto& [name, sec] : rows) std::printf("  %-14s %8.1f ns %6.1f %%\n", name, ns(sec), pc(sec));
+    std::printf("  %-14s %8.1f ns %6.1f %% of the render (not in it)\n", "features", ns(s.features), pc(s.features));
     std::printf("  %-14s %8.1f ns %6.1f %% of the render (not in it)\n", "write", ns(s.write), pc(s.write));
     if (s.lockstep)
         std::printf("  (lockstep render: hit and fresnel+rng replay the scalar steps, which the render does\n"
