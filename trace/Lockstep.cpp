@@ -405,7 +405,7 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
         }
     }
     for (int i = 0; i < n; ++i) {
-        out.push_back(branch_result(st[i], lane[i]));
+        branch_result(st[i], lane[i], out.emplace_back());
         ends[i] = out.size();
         stats.merge(lane[i]);
     }

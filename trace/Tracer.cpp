@@ -995,7 +995,9 @@ PathResult Tracer::sample_path(const Vec3& origin, const Vec3& direction, Rng& r
     st.d = direction;
     st.medium = Medium::Air;
     run<false>(st, &rng, stats, nullptr, nullptr);
-    return branch_result(st, stats);
+    PathResult r;
+    branch_result(st, stats, r);
+    return r;
 }
 
 void Tracer::sample_paths(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
@@ -1083,7 +1085,7 @@ void Tracer::sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& r
     ++stats.paths;
     if (tracing.estimator == Estimator::Sample || tracing.split_depth == 0) {
         run<false>(st, &rng, stats, nullptr, nullptr, first);
-        out.push_back(branch_result(st, stats));
+        branch_result(st, stats, out.emplace_back());
         return;
     }
     st.splits_left = tracing.split_depth;  // <= kMaxSplitDepth (the constructor checks)
@@ -1094,7 +1096,7 @@ void Tracer::sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& r
     for (;;) {
         run<false>(st, &rng, stats, nullptr, &pending, first);
         first = nullptr;
-        out.push_back(branch_result(st, stats));
+        branch_result(st, stats, out.emplace_back());
         if (pending.size == 0) return;
         st = pending.items[static_cast<size_t>(--pending.size)];
     }

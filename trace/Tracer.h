@@ -271,8 +271,9 @@ private:
     // sample_paths with the first segment's hit found already (or nullptr).
     void sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& rng, PathStats& stats,
                            std::vector<PathResult>& out, const Hit* first) const;
-    // Where an ended branch lands on the display (weight 0 or off the display: pixel -1).
-    PathResult branch_result(const State& st, PathStats& stats) const;
+    // Where an ended branch lands on the display (weight 0 or off the display: pixel -1), written
+    // into a default PathResult r (TracerState.h).
+    void branch_result(const State& st, PathStats& stats, PathResult& r) const;
     // The index of medium m at point x (a field's local value).
     double index_at(Medium m, const Vec3& x) const;
 

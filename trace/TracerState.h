@@ -99,28 +99,27 @@ inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candida
     h.offset = trace_tol::kMeshOnlyOffsetUlps * trace_tol::kFloatUlp * mag;
 }
 
-// Where an ended branch lands on the display (weight 0 or off the display: pixel -1).
-inline PathResult Tracer::branch_result(const State& st, PathStats& stats) const {
+// Where an ended branch lands on the display (weight 0 or off the display: pixel -1), written
+// into r, a PathResult as constructed (the caller's emplace_back: written where it stays).
+inline void Tracer::branch_result(const State& st, PathStats& stats, PathResult& r) const {
     ++stats.branches;
-    PathResult r;
     r.defect = st.defect;
     r.random_choices = st.random_choices;
-    if (st.weight == 0) return r;
+    if (st.weight == 0) return;
     if (st.d.z <= 0) {
         ++stats.toward_camera;
-        return r;
+        return;
     }
     const double t = (display_.z - st.o.z) / st.d.z;
     const long l = t > 0 ? display_.pixel(st.o.x + t * st.d.x, st.o.y + t * st.d.y) : -1;
     if (l < 0) {
         ++stats.off_display;
-        return r;
+        return;
     }
     ++stats.on_display;
     stats.display_weight += st.weight;
     r.pixel = l;
     r.weight = st.weight;
-    return r;
 }
 
 }  // namespace ltm
