@@ -274,6 +274,7 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
     for (const lanes::Kernels* k : sets) EXPECT_EQ(lanes::kRays % k->lanes, 0) << k->isa;
     std::mt19937_64 g(4242);
     long refined_lanes = 0, refined_scalar = 0;  // both outcomes of the refinement occur
+    long tir_lanes = 0, drawn_lanes = 0;          // both outcomes of the Fresnel choice occur
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     for (const LensSpec& spec : lenses()) {
         const Lens lens(spec);
@@ -312,7 +313,8 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
                 in.n_to[j] = j % 2 ? 1.5168 : 1.0;
                 in.entering[j] = dot(d, n) < 0 ? -1 : 0;
                 in.skip_chord[j] = std::fabs(u(g)) * 1e-3;
-                in.reflect[j] = u(g) < 0 ? -1 : 0;
+                in.state[j] = g();
+                in.inc[j] = g() | 1u;
                 // A facet candidate near a cap's root (Embree's float distance, a chord away),
                 // now and then far from it (a spurious facet) or at no root at all.
                 const int cap = j % 2;
@@ -329,6 +331,16 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
             const lanes::Kernels& base = *sets.back();
             base.analytic_segments(obj, want_seg, lanes::kRays);
             base.fresnel(want_in, lanes::kRays);
+            // The Fresnel choice is interact's: reflect under TIR without a draw, else where the
+            // path's stream's next uniform is below R, the stream left past that draw.
+            for (int j = 0; j < lanes::kRays; ++j) {
+                Rng rng = Rng::from_state(in.state[j], in.inc[j]);
+                ++(want_in.tir[j] ? tir_lanes : drawn_lanes);
+                const bool reflect = want_in.tir[j] ? true : rng.uniform() < want_in.reflectance[j];
+                ASSERT_EQ(want_in.reflect[j] != 0, reflect) << "lane " << j << ", batch " << batch;
+                ASSERT_EQ(want_in.state[j], rng.state()) << "lane " << j << ", batch " << batch;
+                ASSERT_EQ(want_in.inc[j], in.inc[j]);
+            }
             base.spawn(want_in, lanes::kRays, 3e-15);
             lanes::RefineLanes want_ref = ref;
             base.refine_segments(obj, want_ref, lanes::kRays, 1e-3 * a);
@@ -349,6 +361,8 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
     }
     EXPECT_GT(refined_lanes, 0);
     EXPECT_GT(refined_scalar, 0);
+    EXPECT_GT(tir_lanes, 0);
+    EXPECT_GT(drawn_lanes, 0);
 }
 
 // The camera's streams in lanes (lanes::seed_streams, lanes::uniform in the camera kernel) against

@@ -198,6 +198,12 @@ void fresnel_lanes(InteractLanes& a, int count) {
         store(a.tir + at, F.tir);
         store(a.reflected, at, reflect(d, nf));
         store(a.refracted, at, refract(d, nf, eta, cos_i, F.cos_t));
+        // interact's choice: reflect under TIR without a draw, else where uniform() < R.
+        Streams r{load(a.state + at), load(a.inc + at)};
+        const Bits before = r.state;
+        const Real u = uniform(r);
+        store(a.reflect + at, F.tir | (u < F.reflectance));
+        store(a.state + at, (Bits)select(F.tir, (Mask)before, (Mask)r.state));
     }
 }
 
@@ -224,8 +230,6 @@ void spawn_lanes(InteractLanes& a, int count, double skip_floor) {
         store(a.finite + at, finite(nd));
     }
 }
-
-
 
 void camera(CameraLanes& c, int count) {
     for (int at = 0; at < count; at += kLanes) {

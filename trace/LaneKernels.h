@@ -71,10 +71,13 @@ struct InteractLanes {
     alignas(64) double n_to[kRays];             // ... and after it (eta = n_from / n_to)
     alignas(64) std::int64_t entering[kRays];   // ... dot(d_in, n_out) < 0
     alignas(64) double skip_chord[kRays];       // ... the chord error the skip band allows for
+    // ... each path's stream (Rng::state, Rng::inc); fresnel_lanes leaves state past the draw
+    // where one was taken (not under TIR), as Rng::uniform does.
+    alignas(64) std::uint64_t state[kRays], inc[kRays];
     alignas(64) double reflectance[kRays];      // fresnel_lanes: R (1 under TIR)
     alignas(64) std::int64_t tir[kRays];        // ... total internal reflection
     Vec3s reflected, refracted;                 // ... both directions, not normalized
-    alignas(64) std::int64_t reflect[kRays];    // in (the draw): the reflected branch is taken
+    alignas(64) std::int64_t reflect[kRays];    // ... the reflected branch is taken: TIR, or uniform() < R
     Vec3s o, d;                                 // spawn_lanes: the new ray
     alignas(64) double skip_until[kRays];       // ... the band in which its facet is skipped
     alignas(64) std::int64_t finite[kRays];     // ... set where the new direction is finite
@@ -124,7 +127,8 @@ struct Kernels {
     void (*analytic_segments)(const ObjectLanes& obj, SegmentLanes& s, int count);
     // origin_floor: kOriginFloor times the scene's scale (the tracer's omag floor).
     void (*refine_segments)(const ObjectLanes& obj, RefineLanes& r, int count, double origin_floor);
-    // nf (the normal on the incident side), cos_i, fresnel, reflect and refract.
+    // nf (the normal on the incident side), cos_i, fresnel, reflect and refract, and the
+    // Fresnel choice drawn from each lane's stream (Tracer::interact's).
     void (*fresnel)(InteractLanes& a, int count);
     // The chosen direction normalized and the new ray spawned (Tracer::interact's spawn).
     void (*spawn)(InteractLanes& a, int count, double skip_floor);

@@ -256,6 +256,8 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
                 a.n_to[n] = n_to;  // index_at of a straight medium
                 a.entering[n] = in ? -1 : 0;
                 a.skip_chord[n] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
+                a.state[n] = rngs[i].state();
+                a.inc[n] = rngs[i].inc();
                 to[n] = t;
                 face[n] = &f;
                 lane_of[n++] = j;
@@ -268,21 +270,18 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
 
     const lanes::Kernels& kernels = lanes::kernels();
     const int count = kernels.count(n);
-    pad_lanes(n, count, a.d_in, a.n_out, a.p, a.offset, a.n_from, a.n_to, a.entering, a.skip_chord);
+    pad_lanes(n, count, a.d_in, a.n_out, a.p, a.offset, a.n_from, a.n_to, a.entering, a.skip_chord, a.state, a.inc);
+    // Fresnel, and the choice drawn from each path's own stream as interact draws it.
     kernels.fresnel(a, count);
-    // The Fresnel choice, drawn from each path's own stream as interact draws it.
     for (int j = 0; j < n; ++j) {
         const int i = ids[lane_of[j]];
-        bool r = true;
         if (a.tir[j]) {
             ++stats[i].tir;
         } else {
-            r = rngs[i].uniform() < a.reflectance[j];
+            rngs[i] = Rng::from_state(a.state[j], a.inc[j]);
             ++st[i].random_choices;
         }
-        a.reflect[j] = r ? -1 : 0;
     }
-    pad_lanes(n, count, a.reflect);
     kernels.spawn(a, count, trace_tol::kSkipFloatUlps * trace_tol::kFloatUlp * scale_);
     for (int j = 0; j < n; ++j) {
         const int i = ids[lane_of[j]];

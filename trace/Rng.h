@@ -46,6 +46,9 @@ public:
         r.inc_ = inc;
         return r;
     }
+    // The stream's state and increment, for a SIMD twin to draw from (from_state takes them back).
+    std::uint64_t state() const { return state_; }
+    std::uint64_t inc() const { return inc_; }
     std::uint32_t next_u32() {
         const std::uint64_t old = state_;
         state_ = old * kMultiplier + inc_;
