@@ -189,13 +189,13 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
                      std::all_of(object_patches_.begin(), object_patches_.end(), lanes::lane_patch);
     face_normals_.resize(tri_mesh_.num_triangles());
     for (size_t f = 0; f < tri_mesh_.num_triangles(); ++f) face_normals_[f] = tri_mesh_.face_normal(f);
-    // interact's rules per surface and side, for lanes_interact.
+    // interact's rules per surface and side, for lanes_interact (and interact's escape rule).
     lane_faces_.resize(2 * solid_.surfaces.size());
     for (size_t tag = 0; tag < solid_.surfaces.size(); ++tag) {
         const SurfaceInfo& sf = solid_.surfaces[static_cast<int>(tag)];
         for (int entering = 0; entering < 2; ++entering) {
             LaneFace& f = lane_faces_[2 * tag + static_cast<size_t>(entering)];
-            f.from = entering ? sf.outside : sf.inside;
+            const Medium from = entering ? sf.outside : sf.inside;
             f.to = entering ? sf.inside : sf.outside;
             f.defect = sf.defect;
             f.inclusions = f.to == Medium::Glass && sf.defect < 0 && !face_inclusions_.empty();
@@ -204,8 +204,11 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
             f.simple = sf.optical && f.to != Medium::Absorber &&
                        !(sf.role == SurfaceRole::Rim && scene_.object.rim == RimFinish::Absorbing) &&
                        into.propagation == Propagation::Straight;
+            // Leaving a convex object through its own face into the air: nothing of it can be met
+            // again (State::escaped; interact reads this too). Not for the mesh, whose
+            // tessellation is not exactly convex (docs/benchmarks.md).
             f.escapes = convex_ && options_.representation != Representation::MeshOnly && sf.defect < 0 &&
-                        f.from == Medium::Glass && f.to == Medium::Air;
+                        from == Medium::Glass && f.to == Medium::Air;
         }
     }
 }
@@ -892,8 +895,7 @@ bool Tracer::interact(State& st, const Hit& h, Rng* rng, PathStats& stats, Princ
         } else {
             nd = refract(d_in, nf, eta, cos_i, F.cos_t);
             st.medium = to;
-            st.escaped = convex_ && options_.representation != Representation::MeshOnly && s.defect < 0 &&
-                         from == Medium::Glass && to == Medium::Air;
+            st.escaped = lane_faces_[2 * static_cast<size_t>(h.tag) + entering].escapes;  // the constructor's rule
             if (!split_here) ++stats.transmissions;  // a split counts as one split
             if (rec) rec->transmission *= 1.0 - F.reflectance;
         }

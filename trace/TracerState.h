@@ -59,7 +59,7 @@ struct Tracer::State {
 // `entering` (the ray crosses from the surface's outside to its inside), lane_faces_[2 tag +
 // entering]. Filled once by the constructor from those tables, by interact's rules.
 struct Tracer::LaneFace {
-    Medium from = Medium::Air, to = Medium::Air;  // the media before and after a transmission
+    Medium to = Medium::Air;  // the medium after a transmission
     double n_to = 1;      // the index of `to` (a straight medium's constant; unused otherwise)
     int defect = -1;      // SurfaceInfo::defect
     // The SIMD step applies: an optical surface, not an absorbing rim, `to` neither the absorber
