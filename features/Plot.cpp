@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
 #include <tuple>
+#include <type_traits>
 
 namespace ltm {
 
@@ -256,23 +258,30 @@ public:
         cairo_fill(cr_);
     }
 
-    // The picture as an RGB Image, each channel code / 255.
-    Image image() {
+    // The picture as drawn: its RGB code values.
+    Image8 codes() {
         cairo_surface_flush(surface_);
         const int w = cairo_image_surface_get_width(surface_), h = cairo_image_surface_get_height(surface_);
         const int stride = cairo_image_surface_get_stride(surface_);
         const unsigned char* data = cairo_image_surface_get_data(surface_);
-        Image img(w, h, 3);
-        float* out = img.data.data();
+        Image8 img(w, h, 3);
+        std::uint8_t* out = img.data.data();
         for (int r = 0; r < h; ++r) {
             const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(r) * stride);
             for (int c = 0; c < w; ++c) {
-                const std::uint32_t p = row[c];
-                *out++ = static_cast<float>((p >> 16) & 0xFF) / 255.0f;
-                *out++ = static_cast<float>((p >> 8) & 0xFF) / 255.0f;
-                *out++ = static_cast<float>(p & 0xFF) / 255.0f;
+                const std::uint32_t p = row[c];  // CAIRO_FORMAT_RGB24: 0x00RRGGBB
+                *out++ = static_cast<std::uint8_t>(p >> 16);
+                *out++ = static_cast<std::uint8_t>(p >> 8);
+                *out++ = static_cast<std::uint8_t>(p);
             }
         }
+        return img;
+    }
+    // The picture as an RGB Image, each channel code / 255.
+    Image image() {
+        const Image8 c = codes();
+        Image img(c.width, c.height, 3);
+        for (std::size_t i = 0; i < c.data.size(); ++i) img.data[i] = static_cast<float>(c.data[i]) / 255.0f;
         return img;
     }
 
@@ -288,6 +297,17 @@ void fill_rect(Image& img, int x, int y, int w, int h, const Rgb& c) {
     for (int r = r0; r < r1; ++r)
         for (int col = c0; col < c1; ++col)
             for (int k = 0; k < 3; ++k) img.at(r, col, k) = c[static_cast<std::size_t>(k)];
+}
+// The same in code values: png_code of each channel, what write_png would store for c.
+void fill_rect(Image8& img, int x, int y, int w, int h, const Rgb& c) {
+    const std::uint8_t code[3] = {png_code(c[0]), png_code(c[1]), png_code(c[2])};
+    const int r0 = std::max(y, 0), r1 = std::min(y + h, img.height);
+    const int c0 = std::max(x, 0), c1 = std::min(x + w, img.width);
+    for (int r = r0; r < r1; ++r) {
+        std::uint8_t* out = img.data.data() + (static_cast<std::size_t>(r) * static_cast<std::size_t>(img.width) +
+                                               static_cast<std::size_t>(c0)) * 3;
+        for (int col = c0; col < c1; ++col, out += 3) std::memcpy(out, code, 3);
+    }
 }
 
 // A pixel-crisp position for a 1-pixel line near coordinate v in [0, n]: the middle of the pixel
@@ -664,8 +684,13 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
     return L;
 }
 
-Image pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
-                    double lo, double hi, int pixel_scale, const ImageExtent& extent) {
+namespace {
+
+// pseudo_colour's picture as a float Image or, for a PNG, straight in code values (Image8): the
+// same drawing, the same pixels (fill_rect stores png_code of the colour that the Image holds).
+template <class Picture>
+Picture draw_pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
+                           double lo, double hi, int pixel_scale, const ImageExtent& extent) {
     const PseudoColourLayout L = pseudo_colour_layout(values, width, height, title, lo, hi, pixel_scale, extent);
     Canvas canvas(L.width, L.height);
     canvas.frame(L.image_x, L.image_y, L.image_w, L.image_h, kFrameColour);
@@ -685,7 +710,11 @@ Image pseudo_colour(const std::vector<float>& values, int width, int height, con
         canvas.segment(image_left, y, image_left - kPlotTickLength, y, kFrameColour);
     }
     for (const Label& l : L.labels) canvas.draw(l);
-    Image img = canvas.image();
+    Picture img;
+    if constexpr (std::is_same_v<Picture, Image8>)
+        img = canvas.codes();
+    else
+        img = canvas.image();
 
     // The data and the colour bar, exact: written into the picture, not drawn.
     const double range = L.hi - L.lo;
@@ -700,10 +729,17 @@ Image pseudo_colour(const std::vector<float>& values, int width, int height, con
     return img;
 }
 
+}  // namespace
+
+Image pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
+                    double lo, double hi, int pixel_scale, const ImageExtent& extent) {
+    return draw_pseudo_colour<Image>(values, width, height, title, lo, hi, pixel_scale, extent);
+}
+
 void write_pseudo_colour_png(const std::string& path, const std::vector<float>& values, int width, int height,
                              const std::string& title, double lo, double hi, int pixel_scale,
                              const ImageExtent& extent) {
-    write_png(path, pseudo_colour(values, width, height, title, lo, hi, pixel_scale, extent));
+    write_png(path, draw_pseudo_colour<Image8>(values, width, height, title, lo, hi, pixel_scale, extent));
 }
 
 // ---- montage ----

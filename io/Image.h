@@ -11,6 +11,7 @@
 // Errors: every function that reads or writes a file throws std::runtime_error whose message
 // names the file and what is wrong (missing, empty, truncated, corrupt, unsupported kind, bad arguments). Writers are atomic
 // (io/AtomicFile.h): a failed write leaves an existing file untouched and no temporary behind.
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -38,6 +39,31 @@ struct Image {
     std::size_t pixel_count() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
 };
 
+// An 8-bit picture as a PNG stores it: `channels` code values per pixel (1: gray, 3: RGB),
+// row-major, row 0 on top. Previews are drawn straight into one (features/Plot.h): the float
+// Image of the same picture takes four times the memory, and clearing and converting it was
+// most of a preview's cost.
+struct Image8 {
+    int width = 0, height = 0, channels = 1;
+    std::vector<std::uint8_t> data;  // row-major, row 0 = the top row, channels interleaved
+
+    Image8() = default;
+    Image8(int width_, int height_, int channels_ = 1)  // all zeros
+        : width(width_), height(height_), channels(channels_),
+          data(static_cast<std::size_t>(width_ > 0 ? width_ : 0) * static_cast<std::size_t>(height_ > 0 ? height_ : 0) *
+               static_cast<std::size_t>(channels_ > 0 ? channels_ : 0)) {}
+
+    std::size_t pixel_count() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+};
+
+// The 8-bit code value of v in [0, 1] as write_png stores it: v clamped to [0, 1], then
+// round(255 v), half up. floor(x + 0.5) is that rounding here: x = 255 v has at most 32
+// significant bits (a float times 255), so x + 0.5 is exact in double. k / 255 gives k.
+// NaN has no code value: callers reject it first (write_png names the pixel).
+inline std::uint8_t png_code(float v) {
+    return static_cast<std::uint8_t>(std::clamp(static_cast<double>(v), 0.0, 1.0) * 255.0 + 0.5);
+}
+
 // Reads a PNG or an OpenEXR file, recognised by its first bytes (never by the extension).
 //  PNG (libpng): 1, 2, 4, 8 and 16-bit; gray, gray + alpha, RGB, RGBA and palette images; the
 //    result has 1 channel (gray) or 3 (RGB; palette images are expanded to RGB). Values are the
@@ -62,7 +88,7 @@ inline constexpr std::int64_t kMaxImageValues = std::int64_t{1} << 28;
 std::vector<float> pattern_values(const Image& img);
 
 // An 8-bit PNG: gray for 1 channel, RGB for 3 channels (other counts are an error). Each value is
-// clamped to [0, 1] and rounded to the nearest code value round(255 v) (so k / 255 is written as
+// stored as png_code(v): clamped to [0, 1] and rounded to round(255 v) (so k / 255 is written as
 // k exactly); NaN is an error. Atomic. Deflated at zlib level kPngLevel, not libpng's default 6:
 // previews are written with every render, and zlib was 21 % of a default-scene render's CPU time
 // (perf). Level 3 brings the default scene's write stage from 185-222 ms to 130-138 ms (pairs of
@@ -70,6 +96,9 @@ std::vector<float> pattern_values(const Image& img);
 // and makes them 671 kB.
 inline constexpr int kPngLevel = 3;
 void write_png(const std::string& path, const Image& img);
+// The same for code values as they are (png_code's); the same file as write_png of the Image
+// whose values are these codes / 255.
+void write_png(const std::string& path, const Image8& img);
 
 // A 16-bit greyscale PNG (e.g. an instance mask: 0 = background, k = instance k), width x height
 // values in Image order (row 0 = the top row of the picture). Each value is stored exactly as its

@@ -258,6 +258,35 @@ TEST_F(ImageTest, PngWriteClampsAndRounds) {
     EXPECT_FALSE(fs::exists(path("nan.png")));
 }
 
+// Previews are written from code values (ltm::Image8): the file must be the one write_png makes
+// of the float Image holding those codes / 255, byte for byte, and png_code must be write_png's
+// rounding: k / 255 gives k for every k; values clamp to [0, 1]; halves round up
+// (0.5 -> 127.5 -> 128).
+TEST_F(ImageTest, CodeValueImagesWriteTheFloatImagesFile) {
+    for (int k = 0; k < 256; ++k) ASSERT_EQ(ltm::png_code(static_cast<float>(k) / 255.0f), k) << k;
+    EXPECT_EQ(ltm::png_code(-1.0f), 0);
+    EXPECT_EQ(ltm::png_code(2.0f), 255);
+    EXPECT_EQ(ltm::png_code(0.5f), 128);
+    EXPECT_EQ(ltm::png_code(0.49f / 255.0f), 0);
+    EXPECT_EQ(ltm::png_code(0.51f / 255.0f), 1);
+    for (int channels : {1, 3}) {
+        SCOPED_TRACE(channels);
+        const Image img = code_value_image(31, 7, channels, 11u + static_cast<unsigned>(channels));
+        ltm::Image8 codes(img.width, img.height, img.channels);
+        for (std::size_t i = 0; i < img.data.size(); ++i)
+            codes.data[i] = static_cast<std::uint8_t>(std::lround(img.data[i] * 255.0f));
+        ltm::write_png(path("float.png"), img);
+        ltm::write_png(path("codes.png"), codes);
+        EXPECT_EQ(slurp(path("codes.png")), slurp(path("float.png")));
+    }
+    ltm::Image8 short_data(4, 3, 3);
+    short_data.data.pop_back();
+    const std::string msg = message_of([&] { ltm::write_png(path("short.png"), short_data); });
+    EXPECT_NE(msg.find("'" + path("short.png") + "'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("does not match 4 x 3 x 3"), std::string::npos) << msg;
+    EXPECT_FALSE(fs::exists(path("short.png")));
+}
+
 TEST_F(ImageTest, PngBitDepthsAndColourTypes) {
     auto be16 = [](std::initializer_list<int> values) {
         std::vector<png_byte> r;
