@@ -6,7 +6,8 @@
 // a figure). Data pixels are not drawn by Cairo: they are written into the picture afterwards,
 // exact and nearest-neighbour, so a preview stays a faithful picture of the data. Everything here
 // produces an RGB Image (io/Image.h: 3 channels, values in [0, 1], row 0 on top) that write_png
-// writes (atomically) as an 8-bit PNG.
+// writes (atomically) as an 8-bit PNG; write_pseudo_colour_png draws the same picture straight
+// in code values (Image8), the file byte for byte the same.
 //
 // Colour map: viridis (S. van der Walt and N. Smith, 2015; the 256-entry table of matplotlib's
 // _cm_listed.py, released under CC0), perceptually uniform in CAM02-UCS and monotone in lightness,
@@ -181,7 +182,8 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
 Image pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
                     double lo, double hi, int pixel_scale, const ImageExtent& extent = {});
 
-// pseudo_colour written as an 8-bit RGB PNG (write_png: atomic).
+// pseudo_colour written as an 8-bit RGB PNG (write_png: atomic): the same drawing in code values
+// (Image8), so the file is the one write_png(pseudo_colour(...)) writes, without the float picture.
 void write_pseudo_colour_png(const std::string& path, const std::vector<float>& values, int width, int height,
                              const std::string& title, double lo, double hi, int pixel_scale,
                              const ImageExtent& extent = {});
