@@ -393,7 +393,7 @@ void add_acquire_command(CLI::App& app) {
     cmd->add_flag("--noise-free", args->noise_free, "No camera noise or quantisation: the decoders' own error");
     cmd->add_flag("--verbose", args->verbose, "Print each K's simulation and decoding time");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output folder");
-    cmd->callback([args] { run_guarded("acquire", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("acquire", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

@@ -21,8 +21,10 @@ void add_acquire_command(CLI::App& app);
 int exit_status();
 void set_exit_status(int status);
 
-// Runs a subcommand: its status becomes the exit status; an exception that escapes is an
-// internal error (status 1) reported as "ltmsim NAME: what".
-void run_guarded(const std::string& name, const std::function<int()>& body);
+// Runs a subcommand in a TBB arena of `threads` threads (0: all cores), so that --threads bounds
+// every stage of the command (features, reference, writing), not only its trace: the conventions'
+// "Every command that computes takes --threads N". Its status becomes the exit status; an
+// exception that escapes is an internal error (status 1) reported as "ltmsim NAME: what".
+void run_guarded(const std::string& name, int threads, const std::function<int()>& body);
 
 }  // namespace ltm::app

@@ -149,7 +149,7 @@ void add_dataset_command(CLI::App& app) {
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--jobs", args->jobs, "Samples rendered at once (default: threads + 1); results do not depend on it")
         ->check(CLI::NonNegativeNumber);
-    cmd->callback([args] { run_guarded("dataset", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("dataset", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

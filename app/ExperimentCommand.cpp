@@ -91,7 +91,7 @@ void add_experiment_command(CLI::App& app) {
     cmd->add_option("-o,--output", args->out, "Output folder")->required();
     cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
     cmd->add_flag("--overwrite", args->overwrite, "Replace earlier results in the output folder");
-    cmd->callback([args] { run_guarded("experiment", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("experiment", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

@@ -8,7 +8,6 @@
 // A .npy stack is float32 or float64 of shape (K, P, Q) in display pixel order; its patterns are
 // named STEM.j (j zero-padded to the digits of K - 1), an image's after its file's stem. All the
 // patterns go through T in one pass (features/BlockProduct.h), whatever their number.
-#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <filesystem>
@@ -191,8 +190,7 @@ int run(const FeaturesArgs& a) {
     // One image file alone keeps its old output, DIR/pattern.exr with channel "Image"; anything
     // else (several patterns, or a stack of any size) is a stack.
     const bool single = patterns.size() == 1 && !patterns[0].from_stack;
-    tbb::task_arena arena(a.threads > 0 ? a.threads : tbb::task_arena::automatic);
-    arena.execute([&] { write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr); });
+    write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr);
     if (patterns.empty()) return 0;
     const std::vector<std::vector<float>> images = camera_images(T, patterns, a.threads);
     if (single)
@@ -220,7 +218,7 @@ void add_features_command(CLI::App& app) {
         ->allow_extra_args(false)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
-    cmd->callback([args] { run_guarded("features", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("features", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

@@ -148,7 +148,7 @@ void add_mesh_command(CLI::App& app) {
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
     cmd->add_option("--threads", args->threads, "Threads (meshing is sequential; accepted for uniformity)")
         ->check(CLI::NonNegativeNumber);
-    cmd->callback([args] { run_guarded("mesh", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("mesh", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

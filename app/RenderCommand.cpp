@@ -229,7 +229,7 @@ void add_render_command(CLI::App& app) {
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
     cmd->callback([args, max_memory] {
         args->max_memory_given = max_memory->count() > 0;
-        run_guarded("render", [&] { return run(*args); });
+        run_guarded("render", args->threads, [&] { return run(*args); });
     });
 }
 

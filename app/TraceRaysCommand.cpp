@@ -6,7 +6,6 @@
 #include <fmt/format.h>
 #include <iostream>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "app/Commands.h"
 #include "app/SceneSetup.h"
@@ -61,8 +60,7 @@ int run(const TraceRaysArgs& a) {
                          {"display_pixel", p.display_hit ? io::Json{p.p, p.q} : io::Json()}};
         lines[i] = line.dump() + "\n";
     };
-    tbb::task_arena arena(a.threads > 0 ? a.threads : tbb::task_arena::automatic);
-    arena.execute([&] { tbb::parallel_for(size_t(0), rays.size(), trace_one); });
+    tbb::parallel_for(size_t(0), rays.size(), trace_one);  // in run_guarded's arena of --threads
     std::string out;
     for (const auto& l : lines) out += l;
     std::cout << out << std::flush;
@@ -79,7 +77,7 @@ void add_trace_rays_command(CLI::App& app) {
     cmd->add_option("--threads", args->threads, "Threads (default: all cores); the output is in input order whatever the number")
         ->check(CLI::NonNegativeNumber);
     add_representation_option(cmd, args->representation, {"auto", "refined", "analytic", "mesh-only"});
-    cmd->callback([args] { run_guarded("trace-rays", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("trace-rays", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app

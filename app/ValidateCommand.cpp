@@ -53,7 +53,7 @@ void add_validate_command(CLI::App& app) {
     add_representation_option(cmd, args->representation, {"refined", "analytic"});
     cmd->add_option("--threads", args->threads, "Threads (accepted for uniformity; rays are traced in order)")
         ->check(CLI::NonNegativeNumber);
-    cmd->callback([args] { run_guarded("validate", [&] { return run(*args); }); });
+    cmd->callback([args] { run_guarded("validate", args->threads, [&] { return run(*args); }); });
 }
 
 }  // namespace ltm::app
