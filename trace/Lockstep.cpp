@@ -298,8 +298,9 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         if (a.reflect[j]) {
             if (!a.tir[j]) ++ps.reflections;
         } else {
-            // to[j] is f.to but where an inclusion reaches the face, never the air there.
-            s.escaped = f.escapes && to[j] == Medium::Air;
+            // As interact: the face's rule alone (an inclusion only replaces the glass as `to`,
+            // so it never turns an escape into the air into something else).
+            s.escaped = f.escapes;
             s.medium = to[j];
             ++ps.transmissions;
         }
