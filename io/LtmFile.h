@@ -11,8 +11,8 @@
 //     format.npy   '|S3', shape ()          b'csr'
 //     shape.npy    '<i8', shape (2,)        (rows, cols)
 //     data.npy     '<f4', shape (nnz,)      value of each nonzero
-//   Each entry is deflate-compressed by libzip (ZIP method 8, raw deflate stream; level 1 by
-//   default, see below; level 0 stores, ZIP method 0) with its CRC-32, a fixed timestamp
+//   Each entry is deflate-compressed (ZIP method 8, raw deflate stream from ISA-L's igzip, io/Npz.h;
+//   level 2 by default, see below; level 0 stores, ZIP method 0) with its CRC-32, a fixed timestamp
 //   (1980-01-01 00:00) and no extra fields. Each .npy is format version 1.0 (io/Npy.h):
 //   "\x93NUMPY" 1 0, a little-endian uint16 header length, and the header
 //   "{'descr': '<f4', 'fortran_order': False, 'shape': (N,), }" padded with spaces and ended by
@@ -22,24 +22,34 @@
 //   get ZIP64 fields and a ZIP64 end record, so files above 4 GiB are written in full (APPNOTE
 //   6.3, as Python's zipfile reads). A small file has none.
 //
-// The default level, 1, is measured with bench/bench_npz (median of the writes; the sizes are
-// deterministic, the times vary with the machine's load):
-//   T of scenes/paper/bubbles-r1.yaml (10000 x 250000, 63307 nonzeros, 0.55 MB of arrays; its
-//   trace took 1.49 s on this 2-core machine), 7 writes each:
-//     level 0 (stored)  547617 bytes  0.008 s
-//     level 1           176885 bytes  0.016 s   (1 % of the trace time)
-//     level 6           148744 bytes  0.054 s   (4 %)
-//     level 9           141096 bytes  0.275 s   (18 %)
+// The default level, 2 of igzip's 1..3, is measured with bench/bench_npz (median of 7 writes
+// each, file written and synced; the sizes are deterministic, the times vary with the machine's
+// load), with zlib's level 1 deflating the same arrays in the same run for comparison (the
+// deflate alone; it was the default before igzip, through libzip):
+//   T of scenes/paper/bubbles-r1.yaml (10000 x 250000, 63307 nonzeros, 0.55 MB of arrays):
+//     level 0 (stored)   547617 bytes  0.003 s
+//     level 1            181364 bytes  0.005 s
+//     level 2            180453 bytes  0.005 s
+//     level 3            173960 bytes  0.006 s
+//     zlib level 1       171716 bytes  0.007 s
 //   T of scenes/default.yaml (10000 x 250000, 293261 nonzeros, 2.4 MB of arrays; its trace takes
-//   0.21 s), 5 writes each:
-//     level 0 (stored)  2387249 bytes  0.019 s
-//     level 1            482714 bytes  0.024 s   (11 % of the trace time)
-//     level 6            327780 bytes  0.104 s   (50 %)
-//     level 9            308753 bytes  1.971 s   (940 %)
-// Level 1 already removes 80 % of the bytes; level 6 (numpy.savez_compressed's) saves another
-// third of what is left but costs 4x the time, half a trace on the default scene, and level 9's
-// long match chains are slow on T's repetitive values. The write stage of a render is what users
-// wait for, so level 1 it is; any level is read alike (`ltmsim features`, scipy).
+//   about 0.07 s on 2 threads):
+//     level 0 (stored)  2387249 bytes  0.010 s
+//     level 1            489299 bytes  0.008 s
+//     level 2            483307 bytes  0.008 s
+//     level 3            454409 bytes  0.013 s
+//     zlib level 1       463553 bytes  0.025 s
+//   T of scenes/scale.yaml (1000000 x 4000000, 14745723 nonzeros, 122 MB of arrays; 3 writes):
+//     level 0 (stored)  121966945 bytes  0.361 s
+//     level 1            34842136 bytes  0.358 s
+//     level 2            34471092 bytes  0.357 s
+//     level 3            33962701 bytes  0.479 s
+//     zlib level 1       31325031 bytes  1.411 s
+// igzip's levels 1 and 2 write T four times as fast as zlib's level 1 deflates it alone, within
+// 5-10 % of its size; level 2 is as fast as level 1 and a little smaller (on features.npz's
+// feature images at scale it gives zlib level 1's 23.6 MB, where level 1 gives 24.2 MB); level 3
+// is slower for 1-6 % less. The write stage of a render is what users wait for, so level 2 it is; any
+// level is read alike (`ltmsim features`, scipy, numpy).
 
 // Writing is atomic (io/AtomicFile.h): libzip streams the archive into a new temporary file in the
 // target's folder (".<name>.tmp-<random>"), fsync'ed and renamed onto the path; on any failure the

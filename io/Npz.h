@@ -7,24 +7,24 @@
 //                                        io::npy_array("mask", mask, {h, w})});
 //
 // What write_npz writes (byte-for-byte deterministic: the same arrays and options always give the
-// same file, whatever the machine, as long as libzip and zlib are the same versions):
+// same file, whatever the machine or thread, as long as libzip and ISA-L are the same versions):
 //   A ZIP archive, written by libzip, with one entry "<name>.npy" per array, in the order given.
-//   Each entry is deflate-compressed (ZIP method 8, raw deflate stream from zlib through libzip,
-//   level 1 by default, chosen by measurement in io/LtmFile.h; level 0 stores it instead, ZIP
-//   method 0) with
-//   its CRC-32, a fixed timestamp (1980-01-01 00:00, DOS date 0x0021 time 0), no extra fields and
-//   no comments; otherwise libzip's defaults for a new entry ("made by" Unix, version 6.3, file
-//   mode 0100666 in the external attributes; `zipinfo -v` shows all of it).
+//   Each entry is deflate-compressed (ZIP method 8, a raw deflate stream from ISA-L's igzip,
+//   level 2 of its 1..3 by default, chosen by measurement in io/LtmFile.h; level 0 stores it
+//   instead, ZIP method 0) with its CRC-32, a fixed timestamp (1980-01-01 00:00, DOS date 0x0021
+//   time 0), no extra fields and no comments; otherwise libzip's defaults for a new entry ("made
+//   by" Unix, version 6.3, file mode 0100666 in the external attributes; `zipinfo -v` shows all).
 //   Each .npy is format version 1.0 (io/Npy.h): "\x93NUMPY" 1 0, a little-endian uint16 header
 //   length, and the header "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }" padded
 //   with spaces and ended by '\n' so that the preamble is a multiple of 64 bytes (as numpy pads
 //   it); the array's bytes follow in C order (the last index varies fastest), in the byte order
 //   the descr states.
-//   ZIP64 where needed, as libzip decides: an entry that could compress to 4 GiB or more (by
-//   libzip's worst-case estimate of deflate) gets ZIP64 sizes in its local header; sizes or offsets beyond 0xFFFFFFFF get ZIP64 fields in
-//   the central directory, which then ends with a ZIP64 end-of-central-directory record and
-//   locator (also with 65535 entries or more). So archives above 4 GiB are written in full
-//   (APPNOTE 6.3, as Python's zipfile and numpy read them). Small archives have no ZIP64 fields.
+//   ZIP64 where needed: a deflated entry of 4e9 bytes or more, or a stored one beyond 0xFFFFFFFF,
+//   gets ZIP64 sizes in its local header (Npz.cpp, kZip64Entry); sizes or offsets beyond
+//   0xFFFFFFFF get ZIP64 fields in the central directory, which then ends with a ZIP64
+//   end-of-central-directory record and locator (also with 65535 entries or more). So archives
+//   above 4 GiB are written in full (APPNOTE 6.3, as Python's zipfile and numpy read them). Small
+//   archives have no ZIP64 fields.
 //   No arrays at all give the 22-byte empty ZIP archive (an end record only).
 // Writing is atomic (io/AtomicFile.h): libzip writes the archive through a custom write source
 // into an AtomicFile (streaming; see Npz.cpp), which is renamed onto `path` once libzip has
@@ -65,7 +65,7 @@ constexpr bool negative(T v) {
 }  // namespace detail
 
 struct NpzWriteOptions {
-    int compression_level = 1;  // zlib level 1..9 for deflate; 0 stores the entries (ZIP method 0)
+    int compression_level = 2;  // igzip level 1..3 for deflate; 0 stores the entries (ZIP method 0)
 };
 
 // Fills `out` with the array's bytes [offset, offset + n) as the file holds them and returns how
