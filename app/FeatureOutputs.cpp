@@ -226,14 +226,15 @@ void write_feature_images(const std::string& dir, const FeatureImages& f, const 
     const int scale = std::max(1, 400 / std::max(1, f.width));
     // Every file is independent (and each is atomic), so they are drawn, compressed and fsync'ed
     // in parallel; the bytes do not depend on the order. A failure is rethrown after the others.
+    // The two largest files come first, so that they do not start last and run alone.
     const std::size_t n = previews ? f.channels.size() : 0;
     tbb::parallel_for(std::size_t(0), n + 2, [&](std::size_t i) {
-        if (i == n) {
+        if (i == 0) {
             write_exr((fs::path(dir) / "features.exr").string(), f.width, f.height, f.channels);
-        } else if (i == n + 1) {
+        } else if (i == 1) {
             write_npz_channels((fs::path(dir) / "features.npz").string(), f.width, f.height, f.channels);
         } else {
-            const auto& [name, values] = f.channels[i];
+            const auto& [name, values] = f.channels[i - 2];
             write_pseudo_colour_png((pngs / (name + ".png")).string(), values, f.width, f.height, feature_title(name),
                                     NAN, NAN, scale, camera);
         }
