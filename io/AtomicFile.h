@@ -41,8 +41,8 @@ namespace ltm::io {
 // folder; it is never created), is not a folder or is not writable, or `path` is a folder.
 //
 // Two modes:
-//   Mode::Stream  the caller writes the bytes through write() (with tell() and seek(): OpenEXR
-//                 and libzip's write source go back to patch headers).
+//   Mode::Stream  the caller writes the bytes through write() (with tell() and seek(): write_exr
+//                 and libzip's write source go back to patch tables and headers).
 //   Mode::ByName  for libraries that insist on opening a file by name themselves: the temporary
 //                 file is created (empty, reserving its unique name) and closed; hand
 //                 temporary_path() to the library, let it write (it may truncate, rewrite or

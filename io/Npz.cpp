@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "io/AtomicFile.h"
+#include "io/Deflate.h"
 #include "io/Npy.h"
 
 namespace ltm::io {
@@ -159,10 +160,7 @@ struct Deflater {
     // in the cache.
     static constexpr std::size_t kPiece = 256 * 1024;
 
-    explicit Deflater(int lvl) : level(lvl), out(kPiece) {
-        static constexpr std::size_t sizes[] = {0, ISAL_DEF_LVL1_DEFAULT, ISAL_DEF_LVL2_DEFAULT, ISAL_DEF_LVL3_DEFAULT};
-        level_buf.resize(sizes[level]);
-    }
+    explicit Deflater(int lvl) : level(lvl), level_buf(igzip_level_buffer_size(lvl)), out(kPiece) {}
     void start() {
         isal_deflate_init(&z);
         z.level = static_cast<std::uint32_t>(level);
@@ -360,7 +358,8 @@ void write_archive(const std::string& path, const std::vector<NpyArray>& arrays,
         throw std::runtime_error("cannot write " + kind + " '" + path + "': " + why);
     };
     const int level = options.compression_level;
-    if (level < 0 || level > 3) fail("compression level " + std::to_string(level) + " is outside 0..3");
+    if (level < 0 || level > kIgzipMaxLevel)
+        fail("compression level " + std::to_string(level) + " is outside 0.." + std::to_string(kIgzipMaxLevel));
 
     std::vector<Checked> checked(arrays.size());
     std::set<std::string> names;

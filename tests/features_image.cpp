@@ -1,5 +1,11 @@
 // Image I/O (io/Image.h): PNG and OpenEXR round trips, bit depths and colour types,
 // orientation checked in the files' own bytes, 16-bit masks, bad files, pattern luminance.
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfCompression.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfVersion.h>
 #include <gtest/gtest.h>
 #include <png.h>
 #include <zlib.h>
@@ -81,6 +87,7 @@ struct RawExr {
     int xmin = 0, ymin = 0, xmax = -1, ymax = -1;
     int first_chunk_y = -1;
     std::vector<std::uint8_t> first_chunk;  // decoded bytes of the first chunk (16 scan lines for ZIP)
+    std::size_t first_packed = 0;           // its size in the file
 };
 
 std::int32_t i32(const std::string& s, std::size_t p) {
@@ -125,6 +132,7 @@ RawExr parse_exr(const std::string& s) {
     for (int b = 7; b >= 0; --b) first = (first << 8) | static_cast<unsigned char>(s[p + static_cast<std::size_t>(b)]);
     r.first_chunk_y = i32(s, first);
     const auto packed = static_cast<std::size_t>(i32(s, first + 4));
+    r.first_packed = packed;
     const int width = r.xmax - r.xmin + 1, lines = std::min(16, r.ymax - r.ymin + 1);
     const std::size_t raw_size = static_cast<std::size_t>(lines) * static_cast<std::size_t>(width) * 4 * r.channels.size();
     const std::string packed_bytes = s.substr(first + 8, packed);
@@ -464,6 +472,72 @@ TEST_F(ImageTest, ExrRoundTripIsBitExactAndKeepsNames) {
     EXPECT_EQ(raw.ymin, 0);
     EXPECT_EQ(raw.xmax, w - 1);
     EXPECT_EQ(raw.ymax, h - 1);
+}
+
+// write_exr lays the file out by hand (io/Image.cpp): OpenEXR's own reader (Imf::InputFile, the
+// oracle here) must find the header Imf::Header(width, height) gives with ZIP compression, the
+// long-names flag for a name over 31 characters (OpenEXR's rule), and every value bit for bit,
+// in deflated blocks (smooth values) and stored ones (noise), with a last block shorter than 16
+// lines. The independent parser above decodes the first block from the file's bytes with zlib.
+TEST_F(ImageTest, OpenExrReadsTheHeaderAndEveryBlockWriteExrLaysOut) {
+    const int w = 37, h = 45;  // blocks of 16, 16 and 13 lines
+    const std::size_t n = static_cast<std::size_t>(w * h);
+    const std::string long_name = "AChannelNameOfMoreThanThirtyOneCharacters";
+    std::vector<std::pair<std::string, std::vector<float>>> channels = {{"Smooth", {}}, {long_name, {}}, {"Noise", {}}};
+    std::mt19937 rng(11);
+    for (std::size_t i = 0; i < n; ++i) {
+        channels[0].second.push_back(static_cast<float>(i / 7) * 0.5f);
+        channels[1].second.push_back(static_cast<float>(i % 5));
+        channels[2].second.push_back(std::uniform_real_distribution<float>(-1.0f, 1.0f)(rng));
+    }
+    // Smooth alone (its blocks deflate), Noise alone (stored: deflate does not shrink it), all three.
+    for (int kind = 0; kind < 3; ++kind) {
+        SCOPED_TRACE("case " + std::to_string(kind));
+        const bool with_long_name = kind == 2;
+        auto given = channels;
+        if (kind == 0) given = {channels[0]};
+        if (kind == 1) given = {channels[2]};
+        ltm::write_exr(path("b.exr"), w, h, given);
+        Imf::InputFile in(path("b.exr").c_str());
+        const Imf::Header& header = in.header();
+        EXPECT_EQ(header.compression(), Imf::ZIP_COMPRESSION);
+        EXPECT_EQ(header.lineOrder(), Imf::INCREASING_Y);
+        EXPECT_EQ(header.dataWindow().min.x, 0);
+        EXPECT_EQ(header.dataWindow().max.x, w - 1);
+        EXPECT_EQ(header.dataWindow().max.y, h - 1);
+        EXPECT_EQ(header.displayWindow(), header.dataWindow());
+        EXPECT_EQ(header.pixelAspectRatio(), 1.0f);
+        EXPECT_EQ(header.screenWindowWidth(), 1.0f);
+        std::vector<std::string> attributes;
+        for (auto it = header.begin(); it != header.end(); ++it) attributes.push_back(it.name());
+        EXPECT_EQ(attributes, (std::vector<std::string>{"channels", "compression", "dataWindow", "displayWindow",
+                                                        "lineOrder", "pixelAspectRatio", "screenWindowCenter",
+                                                        "screenWindowWidth"}));
+        EXPECT_EQ((in.version() & Imf::LONG_NAMES_FLAG) != 0, with_long_name);
+        EXPECT_EQ(Imf::getVersion(in.version()), 2);
+        Imf::FrameBuffer fb;
+        std::vector<std::vector<float>> back(given.size(), std::vector<float>(n, -7.0f));
+        for (std::size_t c = 0; c < given.size(); ++c) {
+            ASSERT_NE(header.channels().findChannel(given[c].first), nullptr) << given[c].first;
+            EXPECT_EQ(header.channels()[given[c].first].type, Imf::FLOAT);
+            fb.insert(given[c].first, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(back[c].data()), sizeof(float),
+                                                 sizeof(float) * static_cast<std::size_t>(w)));
+        }
+        in.setFrameBuffer(fb);
+        in.readPixels(0, h - 1);
+        for (std::size_t c = 0; c < given.size(); ++c) EXPECT_TRUE(bit_equal(back[c], given[c].second)) << given[c].first;
+        const RawExr raw = parse_exr(slurp(path("b.exr")));
+        const std::size_t block = static_cast<std::size_t>(16 * w * 4) * given.size();
+        ASSERT_EQ(raw.first_chunk.size(), block);
+        if (kind == 0) EXPECT_LT(raw.first_packed, block / 4);
+        if (kind == 1) EXPECT_EQ(raw.first_packed, block);
+        // Line 0's channels by name (the long name, Noise, Smooth; those present): the last is checked.
+        const std::size_t last = given.size() - 1;
+        const auto& line0 = kind == 1 ? channels[2].second : channels[0].second;
+        for (int x = 0; x < w; ++x)
+            EXPECT_EQ(float_at(raw.first_chunk, last * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)),
+                      line0[static_cast<std::size_t>(x)]);
+    }
 }
 
 TEST_F(ImageTest, ExrRowZeroIsTheFirstScanLineOfTheFile) {
