@@ -1,5 +1,6 @@
 #include "io/Deflate.h"
 
+#include <isa-l/crc.h>
 #include <isa-l/igzip_lib.h>
 
 #include <algorithm>
@@ -46,6 +47,10 @@ bool zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t
     if (r != COMP_OK) throw std::runtime_error("ISA-L's deflate failed (code " + std::to_string(r) + ")");
     out.resize(z.total_out);
     return true;
+}
+
+std::uint32_t crc32(std::uint32_t crc, const void* p, std::size_t n) {
+    return crc32_gzip_refl(crc, static_cast<const unsigned char*>(p), n);
 }
 
 }  // namespace ltm::io

@@ -4,10 +4,11 @@
 // per cent of its size (io/LtmFile.h and docs/benchmarks.md give the figures). igzip's output
 // depends only on the input, the level and ISA-L's version: never on the thread or the run.
 //
-// Two users: io/Npz.cpp streams each .npz entry through igzip as raw deflate (its own loop, as
-// libzip pulls the bytes), and write_exr (io/Image.cpp) deflates each block of scan lines whole,
-// in the zlib format OpenEXR's ZIP compression reads.
+// Its users: io/Npz.cpp streams each .npz entry through igzip as raw deflate (its own loop, as
+// libzip pulls the bytes); io/Image.cpp deflates whole in the zlib format each block of scan lines
+// of an EXR file (as OpenEXR's ZIP compression reads them) and the rows of a PNG file.
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace ltm::io {
@@ -23,5 +24,9 @@ std::size_t igzip_level_buffer_size(int level);
 // fewer than `limit` bytes: returns true. Returns false when it would take `limit` bytes or more
 // (`out` then holds nothing of use). Throws std::runtime_error if igzip fails otherwise.
 bool zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit, std::vector<unsigned char>& out);
+
+// The CRC-32 of ZIP, gzip and PNG (ISO 3309, reflected, as zlib's crc32) of p[0, n), continuing
+// from `crc` (0 to start): crc32(crc32(0, a), b) is the CRC of a followed by b.
+std::uint32_t crc32(std::uint32_t crc, const void* p, std::size_t n);
 
 }  // namespace ltm::io

@@ -89,12 +89,13 @@ std::vector<float> pattern_values(const Image& img);
 
 // An 8-bit PNG: gray for 1 channel, RGB for 3 channels (other counts are an error). Each value is
 // stored as png_code(v): clamped to [0, 1] and rounded to round(255 v) (so k / 255 is written as
-// k exactly); NaN is an error. Atomic. Deflated at zlib level kPngLevel, not libpng's default 6:
-// previews are written with every render, and zlib was 21 % of a default-scene render's CPU time
-// (perf). Level 3 brings the default scene's write stage from 185-222 ms to 130-138 ms (pairs of
-// runs, 2 threads, alternating the two builds) for previews 372 -> 511 kB; level 1 is no faster
-// and makes them 671 kB.
-inline constexpr int kPngLevel = 3;
+// k exactly); NaN is an error. Atomic. The file is written by io/Image.cpp itself (IHDR, IDAT
+// chunks of the unfiltered rows, IEND), deflated by igzip (io/Deflate.h) at its level kPngLevel:
+// previews are written with every render. Encoding and writing the 17 previews of the industrial
+// scene (scenes/scale.yaml, 1000 x 1000 each) took 0.82 s through libpng and zlib at level 3, and
+// takes 0.12 s, for 9.8 MB instead of 8.6 (the default scene's: 45 -> 16 ms, 507 -> 539 kB);
+// igzip's level 1 is no faster and level 3 slower (one thread, best of 5 writes of the 17 pictures).
+inline constexpr int kPngLevel = 2;
 void write_png(const std::string& path, const Image& img);
 // The same for code values as they are (png_code's); the same file as write_png of the Image
 // whose values are these codes / 255.

@@ -1,6 +1,5 @@
 #include "io/Npz.h"
 
-#include <isa-l/crc.h>
 #include <isa-l/igzip_lib.h>
 #include <zip.h>
 
@@ -278,7 +277,7 @@ struct EntrySource {
                 while (d.z.avail_out > 0 && d.z.internal_state.state != ZSTATE_END) {
                     if (d.z.avail_in == 0 && !d.z.end_of_stream) {
                         const auto [p, k] = next_piece();
-                        d.crc = crc32_gzip_refl(d.crc, p, k);
+                        d.crc = crc32(d.crc, p, k);
                         d.z.next_in = const_cast<std::uint8_t*>(p);  // igzip only reads it
                         d.z.avail_in = static_cast<std::uint32_t>(k);
                         d.z.end_of_stream = pos == size();
