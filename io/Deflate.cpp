@@ -20,17 +20,31 @@ std::size_t igzip_level_buffer_size(int level) {
     }
 }
 
-bool zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit, std::vector<unsigned char>& out) {
+unsigned char* thread_buffer(int slot, std::size_t n) {
+    thread_local std::vector<unsigned char> buffers[4];
+    if (slot < 0 || slot > 3) throw std::invalid_argument("thread_buffer: slot " + std::to_string(slot) + " is outside 0..3");
+    std::vector<unsigned char>& b = buffers[slot];
+    if (b.size() < n) b.resize(n);
+    return b.data();
+}
+
+Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit) {
     constexpr std::size_t kMax = std::numeric_limits<std::uint32_t>::max();
     if (n > kMax) throw std::invalid_argument("zlib_deflate: more than 4 GiB in one piece");
-    if (limit == 0) return false;
-    // The working memory stays with the thread: a fresh buffer per call would be page-faulted in
-    // every time (about 10 us a page on a virtual machine).
+    if (limit == 0) return {};
     thread_local std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
+    thread_local std::vector<unsigned char> out;
     std::vector<std::uint8_t>& buf = level_buf[level >= kIgzipMinLevel && level <= kIgzipMaxLevel ? level : 0];
+    // The stream must depend on `in` alone, never on the thread's history (tests/app_dataset.cpp
+    // compares datasets made on one thread and on two). The working memory keeps the previous
+    // stream's tables, which igzip does not promise to ignore: zeroed, it is as fresh.
     if (buf.empty()) buf.resize(igzip_level_buffer_size(level));
-    out.resize(std::min(limit - 1, kMax));
-    isal_zstream z;
+    else std::fill(buf.begin(), buf.end(), std::uint8_t{0});
+    const std::size_t room = std::min(limit - 1, kMax);
+    if (out.size() < room) out.resize(room);
+    // Zeroed first: isal_deflate_stateless_init leaves part of the state as it was, and stack
+    // garbage there made a block's bytes depend on the calls before it (the dataset test).
+    isal_zstream z{};
     isal_deflate_stateless_init(&z);
     z.level = static_cast<std::uint32_t>(level);
     z.level_buf = buf.data();
@@ -41,12 +55,11 @@ bool zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t
     z.next_in = const_cast<std::uint8_t*>(in);  // igzip only reads it
     z.avail_in = static_cast<std::uint32_t>(n);
     z.next_out = out.data();
-    z.avail_out = static_cast<std::uint32_t>(out.size());
+    z.avail_out = static_cast<std::uint32_t>(room);
     const int r = isal_deflate_stateless(&z);
-    if (r == STATELESS_OVERFLOW) return false;
+    if (r == STATELESS_OVERFLOW) return {};
     if (r != COMP_OK) throw std::runtime_error("ISA-L's deflate failed (code " + std::to_string(r) + ")");
-    out.resize(z.total_out);
-    return true;
+    return {out.data(), z.total_out};
 }
 
 std::uint32_t crc32(std::uint32_t crc, const void* p, std::size_t n) {

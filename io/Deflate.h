@@ -19,11 +19,23 @@ inline constexpr int kIgzipMinLevel = 1, kIgzipMaxLevel = 3;
 // The working memory igzip needs at `level` (1..3): the size ISA-L documents as its default.
 std::size_t igzip_level_buffer_size(int level);
 
+// Deflated bytes in a buffer of the calling thread (see zlib_deflate).
+struct Deflated {
+    const unsigned char* data = nullptr;
+    std::size_t size = 0;  // 0: did not fit
+};
+
 // `in` deflated whole in the zlib format (RFC 1950: a 2-byte header, the deflate stream, then the
-// Adler-32 of `in`) at igzip level `level` (1..3), into `out` (resized to fit), if that takes
-// fewer than `limit` bytes: returns true. Returns false when it would take `limit` bytes or more
-// (`out` then holds nothing of use). Throws std::runtime_error if igzip fails otherwise.
-bool zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit, std::vector<unsigned char>& out);
+// Adler-32 of `in`) at igzip level `level` (1..3), if that takes fewer than `limit` bytes; else
+// size 0. The bytes depend on `in`, `level` and `limit` (igzip adapts to the room it is given). The bytes are in a buffer the calling thread keeps and reuses: valid until its next call
+// of zlib_deflate. (A fresh buffer per call was a fifth of the default scene's write stage: every
+// new page costs a fault, about 10 us on a virtual machine.) Throws std::runtime_error if igzip
+// fails otherwise.
+Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit);
+
+// A byte buffer of the calling thread's for `slot` (0..3), at least n bytes long, kept between
+// calls for the same reason: for the pictures and blocks io/Image.cpp encodes.
+unsigned char* thread_buffer(int slot, std::size_t n);
 
 // The CRC-32 of ZIP, gzip and PNG (ISO 3309, reflected, as zlib's crc32) of p[0, n), continuing
 // from `crc` (0 to start): crc32(crc32(0, a), b) is the CRC of a followed by b.

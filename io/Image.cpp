@@ -97,35 +97,38 @@ void png_read_fn(png_structp png, png_bytep out, png_size_t n) {
 }
 
 
-// Encodes `samples` (rows top to bottom, each width * channels samples of bit_depth 8 or 16,
-// 16-bit ones big-endian) as a PNG file (the PNG specification, ISO/IEC 15948): the signature;
+// Writes `samples` (rows top to bottom, each width * channels samples of bit_depth 8 or 16,
+// 16-bit ones big-endian, `size` bytes in all) to `path` as a PNG file, atomically (the PNG specification, ISO/IEC 15948): the signature;
 // IHDR (width, height, bit depth, colour type; compression, filter and interlace methods 0);
 // IDAT chunks holding the zlib stream (RFC 1950) of the rows, each row after its filter-type byte
 // 0 (None: previews are flat colour and noisy data cells, which the adaptive filters do not
 // predict; unfiltered rows deflated ~10 % smaller and ~35 % faster with libpng); IEND. Each chunk
 // is its length, type, data and the CRC-32 of type and data. The rows are deflated whole by
 // igzip (io/Deflate.h) at kPngLevel.
-std::vector<unsigned char> encode_png(int width, int height, int bit_depth, int color_type,
-                                      const std::vector<unsigned char>& samples) {
-    const std::size_t rowbytes = samples.size() / static_cast<std::size_t>(height);
-    std::vector<unsigned char> rows((rowbytes + 1) * static_cast<std::size_t>(height));
+void write_png_file(const std::string& path, int width, int height, int bit_depth, int color_type,
+                    const unsigned char* samples, std::size_t size) {
+    const std::size_t rowbytes = size / static_cast<std::size_t>(height);
+    unsigned char* rows = io::thread_buffer(0, (rowbytes + 1) * static_cast<std::size_t>(height));
     for (std::size_t r = 0; r < static_cast<std::size_t>(height); ++r) {
         rows[r * (rowbytes + 1)] = 0;  // filter type None
-        std::memcpy(&rows[r * (rowbytes + 1) + 1], samples.data() + r * rowbytes, rowbytes);
+        std::memcpy(rows + r * (rowbytes + 1) + 1, samples + r * rowbytes, rowbytes);
     }
     // Deflate never needs more than its stored blocks (5 bytes per 64 KiB) and zlib's 6 bytes of
     // header and Adler-32; igzip falls back to stored blocks where compressing does not fit.
-    std::vector<unsigned char> z;
-    if (!io::zlib_deflate(rows.data(), rows.size(), kPngLevel, rows.size() + rows.size() / 1024 + 1024, z))
-        throw std::runtime_error("deflate did not fit in its worst-case size");
-    std::vector<unsigned char> png(kPngMagic, kPngMagic + 8);
-    const auto chunk = [&](const char* type, const unsigned char* data, std::size_t n) {
-        for (int k = 3; k >= 0; --k) png.push_back(static_cast<unsigned char>(n >> (8 * k)));
-        const std::size_t start = png.size();
-        png.insert(png.end(), type, type + 4);
-        png.insert(png.end(), data, data + n);
-        const std::uint32_t crc = io::crc32(0, png.data() + start, n + 4);
-        for (int k = 3; k >= 0; --k) png.push_back(static_cast<unsigned char>(crc >> (8 * k)));
+    const std::size_t n = (rowbytes + 1) * static_cast<std::size_t>(height);
+    const io::Deflated z = io::zlib_deflate(rows, n, kPngLevel, n + n / 1024 + 1024);
+    if (z.size == 0) throw std::runtime_error("cannot write PNG image '" + path + "': deflate did not fit in its worst-case size");
+    io::AtomicFile file(path, "PNG image");
+    file.write(kPngMagic, 8);
+    const auto chunk = [&](const char* type, const unsigned char* data, std::size_t len) {
+        unsigned char head[8], tail[4];
+        for (int k = 0; k < 4; ++k) head[k] = static_cast<unsigned char>(len >> (24 - 8 * k));
+        std::memcpy(head + 4, type, 4);
+        const std::uint32_t crc = io::crc32(io::crc32(0, type, 4), data, len);
+        for (int k = 0; k < 4; ++k) tail[k] = static_cast<unsigned char>(crc >> (24 - 8 * k));
+        file.write(head, 8);
+        file.write(data, len);
+        file.write(tail, 4);
     };
     unsigned char ihdr[13] = {};
     for (int k = 0; k < 4; ++k) {
@@ -134,12 +137,11 @@ std::vector<unsigned char> encode_png(int width, int height, int bit_depth, int 
     }
     ihdr[8] = static_cast<unsigned char>(bit_depth);
     ihdr[9] = static_cast<unsigned char>(color_type);  // ihdr[10..12]: methods 0
-    png.reserve(png.size() + 25 + z.size() + 12 * (z.size() / kPngMaxIdat + 1) + 12);
     chunk("IHDR", ihdr, sizeof ihdr);
-    for (std::size_t at = 0; at < z.size(); at += kPngMaxIdat)
-        chunk("IDAT", z.data() + at, std::min(kPngMaxIdat, z.size() - at));
+    for (std::size_t at = 0; at < z.size; at += kPngMaxIdat)
+        chunk("IDAT", z.data + at, std::min(kPngMaxIdat, z.size - at));
     chunk("IEND", nullptr, 0);
-    return png;
+    file.commit();
 }
 
 // Decodes into `pixels` (8 or 16-bit samples, 1 or 3 channels); false with io.message on error.
@@ -380,16 +382,9 @@ void write_png(const std::string& path, const Image& img) {
 }
 
 void write_png(const std::string& path, const Image8& img) {
-    auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write PNG image '" + path + "': " + why); };
     check_8bit_picture(img, path);
-    std::vector<unsigned char> encoded;
-    try {
-        encoded = encode_png(img.width, img.height, 8, img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
-                             img.data);
-    } catch (const std::exception& e) {
-        fail(e.what());
-    }
-    io::write_file(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()), "PNG image");
+    write_png_file(path, img.width, img.height, 8, img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
+                   img.data.data(), img.data.size());
 }
 
 void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& values) {
@@ -405,13 +400,7 @@ void write_png16(const std::string& path, int width, int height, const std::vect
         samples[2 * i] = static_cast<unsigned char>(values[i] >> 8);
         samples[2 * i + 1] = static_cast<unsigned char>(values[i] & 0xFF);
     }
-    std::vector<unsigned char> encoded;
-    try {
-        encoded = encode_png(width, height, 16, PNG_COLOR_TYPE_GRAY, samples);
-    } catch (const std::exception& e) {
-        fail(e.what());
-    }
-    io::write_file(path, std::string_view(reinterpret_cast<const char*>(encoded.data()), encoded.size()), "PNG image");
+    write_png_file(path, width, height, 16, PNG_COLOR_TYPE_GRAY, samples.data(), samples.size());
 }
 
 void write_exr(const std::string& path, int width, int height,
@@ -492,12 +481,11 @@ void write_exr(const std::string& path, int width, int height,
     const std::uint64_t table_at = file.tell();
     file.write(std::string(8 * static_cast<std::size_t>(blocks), '\0'));
     std::string table, frame;
-    std::vector<unsigned char> pixels, split, deflated;
     for (int b = 0; b < blocks; ++b) {
         const int y0 = b * kExrZipLines, lines = std::min(kExrZipLines, height - y0);
         const std::size_t size = static_cast<std::size_t>(lines) * sorted.size() * row;
-        pixels.resize(size);
-        unsigned char* p = pixels.data();
+        unsigned char* const pixels = io::thread_buffer(0, size);
+        unsigned char* p = pixels;
         for (int y = y0; y < y0 + lines; ++y)
             for (const auto* c : sorted) {
                 const float* v = c->second.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
@@ -512,20 +500,20 @@ void write_exr(const std::string& path, int width, int height,
                     }
                 }
             }
-        split.resize(size);
+        unsigned char* const split = io::thread_buffer(1, size);
         const std::size_t half = (size + 1) / 2;
         for (std::size_t i = 0; i < size; ++i) split[(i & 1) ? half + i / 2 : i / 2] = pixels[i];
         for (std::size_t i = size; i-- > 1;) split[i] = static_cast<unsigned char>(split[i] - split[i - 1] + 128);
-        const bool smaller = io::zlib_deflate(split.data(), size, kExrZipLevel, size, deflated);
+        const io::Deflated deflated = io::zlib_deflate(split, size, kExrZipLevel, size);
+        const bool smaller = deflated.size > 0;
         const std::uint64_t at = file.tell();
         put_le32(table, static_cast<std::uint32_t>(at));
         put_le32(table, static_cast<std::uint32_t>(at >> 32));
         frame.clear();
         put_le32(frame, static_cast<std::uint32_t>(y0));
-        put_le32(frame, static_cast<std::uint32_t>(smaller ? deflated.size() : size));
+        put_le32(frame, static_cast<std::uint32_t>(smaller ? deflated.size : size));
         file.write(frame);
-        if (smaller) file.write(deflated.data(), deflated.size());
-        else file.write(pixels.data(), size);
+        file.write(smaller ? deflated.data : pixels, smaller ? deflated.size : size);
     }
     file.seek(table_at);
     file.write(table);

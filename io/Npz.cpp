@@ -160,7 +160,12 @@ struct Deflater {
     static constexpr std::size_t kPiece = 256 * 1024;
 
     explicit Deflater(int lvl) : level(lvl), level_buf(igzip_level_buffer_size(lvl)), out(kPiece) {}
+    // A new stream, from a zeroed state and working memory: isal_deflate_init leaves part of the
+    // stream's state as it was, and igzip's tables keep the previous stream's traces, which would
+    // make an entry's bytes depend on the entries before it (io/Deflate.cpp does the same).
     void start() {
+        z = isal_zstream{};
+        std::fill(level_buf.begin(), level_buf.end(), std::uint8_t{0});
         isal_deflate_init(&z);
         z.level = static_cast<std::uint32_t>(level);
         z.level_buf = level_buf.data();
