@@ -2,7 +2,9 @@
 // Deflate (RFC 1951) for io/'s writers, by ISA-L's igzip (Debian's libisal, BSD-3-Clause): about
 // five times as fast as zlib's fastest level on the arrays and images ltmsim writes, within a few
 // per cent of its size (io/LtmFile.h and docs/benchmarks.md give the figures). igzip's output
-// depends only on the input, the level and ISA-L's version: never on the thread or the run.
+// depends only on the input, the level (and for zlib_deflate the limit) and ISA-L's version, never
+// on the thread or the run; ISA-L picks its kernels by the CPU's instruction sets, so another kind
+// of CPU may write other bytes for the same input (which inflate to the same input).
 //
 // Its users: io/Npz.cpp streams each .npz entry through igzip as raw deflate (its own loop, as
 // libzip pulls the bytes); io/Image.cpp deflates whole in the zlib format each block of scan lines

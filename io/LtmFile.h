@@ -3,7 +3,7 @@
 // `scipy.sparse.load_npz("ltm.npz")` returns it as a scipy.sparse.csr_matrix (float32 values).
 //
 // What write_ltm_npz writes (byte-for-byte deterministic: the same matrix and options always give
-// the same file):
+// the same file, on the same kind of CPU; io/Npz.h says why another may deflate differently):
 //   An .npz archive (io/Npz.h, which writes it) of five .npy arrays, in this order (the order
 //   scipy.sparse.save_npz uses):
 //     indices.npy  '<i4', shape (nnz,)      column of each nonzero

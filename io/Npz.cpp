@@ -138,15 +138,15 @@ struct ArchiveSink {
 //
 // Why: zlib's level 1 was the write stage's largest cost at scale (a 1000 x 1000 camera against a
 // 2000 x 2000 display: 1.1 s of one core for ltm.npz's 126 MB, 0.9 s for features.npz's 68 MB),
-// and igzip level 1 deflates the same arrays about 5 times as fast, to within a few per cent of
-// zlib's size (docs/benchmarks.md). libzip stays the archive writer: an entry source whose stat
-// says its bytes are deflated already is copied as it is (libzip 1.7's add_data: no recompression
-// when the source's method is the entry's), with the CRC-32 and size the stat gives once the last
-// byte is read.
+// and igzip's level 2 deflates the same arrays about four times as fast, within 10 % of zlib's
+// size (io/LtmFile.h, docs/benchmarks.md). libzip stays the archive writer: an entry source whose
+// stat says its bytes are deflated already is copied as it is (libzip 1.7's add_data: no
+// recompression when the source's method is the entry's), with the CRC-32 and size the stat gives
+// once the last byte is read.
 //
-// igzip's output depends only on the input, the level and the library's version, not on the
-// thread or the run (the same arrays always give the same archive); its CPU dispatch picks
-// among kernels that write the same stream on every x86-64 with SSE4.2.
+// The bytes depend on the input, the level and ISA-L's version, never on the thread or the run
+// (start() zeroes the state). ISA-L picks its kernels by the CPU's instruction sets, so another
+// kind of CPU may deflate the same arrays into other bytes, which inflate to the same arrays.
 struct Deflater {
     int level = 1;                          // igzip's level, 1..3 (NpzWriteOptions::compression_level)
     isal_zstream z{};

@@ -7,7 +7,9 @@
 //                                        io::npy_array("mask", mask, {h, w})});
 //
 // What write_npz writes (byte-for-byte deterministic: the same arrays and options always give the
-// same file, whatever the machine or thread, as long as libzip and ISA-L are the same versions):
+// same file, whatever the thread or the run, with the same versions of libzip and ISA-L on the
+// same kind of CPU; ISA-L picks its deflate kernels by the CPU's instruction sets, so on another
+// kind the deflated bytes may differ, never the arrays they inflate to):
 //   A ZIP archive, written by libzip, with one entry "<name>.npy" per array, in the order given.
 //   Each entry is deflate-compressed (ZIP method 8, a raw deflate stream from ISA-L's igzip,
 //   level 2 of its 1..3 by default, chosen by measurement in io/LtmFile.h; level 0 stores it
