@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <random>
@@ -17,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "io/Npy.h"
 #include "io/Npz.h"
 #include "tests/TestSupport.h"
 
@@ -426,6 +428,57 @@ TEST_F(NpzTest, DeflatedEntriesInflateToTheStoredBytesWithTheirCrc) {
             EXPECT_TRUE(inflate_raw(p.data, s.size) == s.data);
             EXPECT_LE(p.data.size(), s.size + s.size / 1000 + 1024);
         }
+    }
+}
+
+// A deflated entry of 4e9 bytes or more (io/Npz.cpp, kZip64Entry) gets a ZIP64 extra field in its
+// local header, since libzip learns its size only after the data: the write must succeed and the
+// headers hold the true sizes and CRC-32 (4e9 zero bytes from a fill; their CRC-32 is computed
+// here with zlib, piece by piece). Python's zipfile reads the entry's sizes back.
+TEST_F(NpzTest, AnEntryOfFourBillionBytesGetsZip64Sizes) {
+    const std::uint64_t n = 4000000000ULL;
+    NpyArray zeros{"zeros", "|u1", {n}, nullptr, static_cast<std::size_t>(n),
+                   [n](std::uint64_t offset, void* out, std::size_t len) -> std::size_t {
+                       if (offset >= n) return 0;
+                       len = static_cast<std::size_t>(std::min<std::uint64_t>(len, n - offset));
+                       std::memset(out, 0, len);
+                       return len;
+                   }};
+    write_npz(path("big.npz"), {zeros});
+    const std::string zip = slurp(path("big.npz"));
+    const auto u16 = [&](std::size_t at) {
+        return static_cast<std::uint32_t>(static_cast<unsigned char>(zip.at(at))) |
+               static_cast<std::uint32_t>(static_cast<unsigned char>(zip.at(at + 1))) << 8;
+    };
+    const auto u32 = [&](std::size_t at) { return u16(at) | u16(at + 2) << 16; };
+    const auto u64 = [&](std::size_t at) { return static_cast<std::uint64_t>(u32(at)) | static_cast<std::uint64_t>(u32(at + 4)) << 32; };
+    ASSERT_EQ(zip.compare(0, 4, "PK\x03\x04"), 0);
+    EXPECT_EQ(u16(8), 8u);  // deflated
+    const std::size_t name = u16(26), extra = u16(28);
+    ASSERT_GE(extra, 20u);
+    const std::size_t x = 30 + name;
+    ASSERT_EQ(u16(x), 1u);  // the ZIP64 extended information's header ID
+    const std::string preamble = ltm::io::npy_preamble("|u1", {n});
+    const std::uint64_t size = preamble.size() + n;
+    EXPECT_EQ(u64(x + 4), size);
+    const std::uint64_t packed = u64(x + 12);
+    EXPECT_LT(packed, 64u << 20);  // zeros deflate to about a thousandth
+    // The 32-bit fields: 0xFFFFFFFF, or (libzip 1.7, where the values fit) the values themselves.
+    EXPECT_TRUE(u32(18) == 0xFFFFFFFFu || u32(18) == packed) << u32(18);
+    EXPECT_TRUE(u32(22) == 0xFFFFFFFFu || u32(22) == size) << u32(22);
+    uLong crc = crc32(0L, reinterpret_cast<const Bytef*>(preamble.data()), static_cast<uInt>(preamble.size()));
+    const std::vector<unsigned char> piece(1 << 20, 0);
+    for (std::uint64_t done = 0; done < n; done += piece.size())
+        crc = crc32(crc, piece.data(), static_cast<uInt>(std::min<std::uint64_t>(piece.size(), n - done)));
+    EXPECT_EQ(u32(14), static_cast<std::uint32_t>(crc));
+    EXPECT_EQ(zip.compare(x + extra + packed, 4, "PK\x01\x02"), 0);  // the central directory follows the data
+    if (numpy_missing().empty()) {
+        int status = 0;
+        const std::string out = python("import zipfile\nfor i in zipfile.ZipFile('" + path("big.npz") +
+                                           "').infolist(): print(i.filename, i.file_size, i.compress_size, i.CRC)\n",
+                                       &status);
+        ASSERT_EQ(status, 0) << out;
+        EXPECT_EQ(out, "zeros.npy " + std::to_string(size) + " " + std::to_string(packed) + " " + std::to_string(crc) + "\n");
     }
 }
 
