@@ -178,6 +178,9 @@ public:
     Canvas(int width, int height, PictureMemory* memory = nullptr) : memory_(memory) {
         if (memory_) {
             const int stride = cairo_format_stride_for_width(CAIRO_FORMAT_RGB24, width);
+            if (stride < 0)
+                throw std::runtime_error("Cairo: cannot make a " + std::to_string(width) + " x " + std::to_string(height) +
+                                         " canvas: the width is too large");
             memory_->surface.resize(static_cast<std::size_t>(stride) * static_cast<std::size_t>(height > 0 ? height : 0));
             surface_ = cairo_image_surface_create_for_data(memory_->surface.data(), CAIRO_FORMAT_RGB24, width, height,
                                                            stride);

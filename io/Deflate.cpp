@@ -30,7 +30,10 @@ unsigned char* thread_buffer(int slot, std::size_t n) {
 
 Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit) {
     constexpr std::size_t kMax = std::numeric_limits<std::uint32_t>::max();
-    if (n > kMax) throw std::invalid_argument("zlib_deflate: more than 4 GiB in one piece");
+    // igzip counts in 32 bits, and its stored-block fallback adds up to 64 KiB to the input's size
+    // in 32 bits too (ISA-L 2.30): inputs stay 16 MiB clear of 4 GiB.
+    if (n > kMaxDeflatePiece)
+        throw std::invalid_argument("more than " + std::to_string(kMaxDeflatePiece) + " bytes to deflate in one piece");
     if (limit == 0) return {};
     thread_local std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
     thread_local std::vector<unsigned char> out;

@@ -33,6 +33,8 @@ struct Deflated {
 // of zlib_deflate. (A fresh buffer per call was a fifth of the default scene's write stage: every
 // new page costs a fault, about 10 us on a virtual machine.) Throws std::runtime_error if igzip
 // fails otherwise.
+// At most kMaxDeflatePiece bytes in (std::invalid_argument beyond).
+inline constexpr std::size_t kMaxDeflatePiece = 0xFFFFFFFFu - (16u << 20);
 Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit);
 
 // A byte buffer of the calling thread's for `slot` (0..3), at least n bytes long, kept between

@@ -116,7 +116,12 @@ void write_png_file(const std::string& path, int width, int height, int bit_dept
     // Deflate never needs more than its stored blocks (5 bytes per 64 KiB) and zlib's 6 bytes of
     // header and Adler-32; igzip falls back to stored blocks where compressing does not fit.
     const std::size_t n = (rowbytes + 1) * static_cast<std::size_t>(height);
-    const io::Deflated z = io::zlib_deflate(rows, n, kPngLevel, n + n / 1024 + 1024);
+    io::Deflated z;
+    try {
+        z = io::zlib_deflate(rows, n, kPngLevel, n + n / 1024 + 1024);
+    } catch (const std::exception& e) {
+        throw std::runtime_error("cannot write PNG image '" + path + "': " + e.what());
+    }
     if (z.size == 0) throw std::runtime_error("cannot write PNG image '" + path + "': deflate did not fit in its worst-case size");
     io::AtomicFile file(path, "PNG image");
     file.write(kPngMagic, 8);
@@ -504,7 +509,12 @@ void write_exr(const std::string& path, int width, int height,
         const std::size_t half = (size + 1) / 2;
         for (std::size_t i = 0; i < size; ++i) split[(i & 1) ? half + i / 2 : i / 2] = pixels[i];
         for (std::size_t i = size; i-- > 1;) split[i] = static_cast<unsigned char>(split[i] - split[i - 1] + 128);
-        const io::Deflated deflated = io::zlib_deflate(split, size, kExrZipLevel, size);
+        io::Deflated deflated;
+        try {
+            deflated = io::zlib_deflate(split, size, kExrZipLevel, size);
+        } catch (const std::exception& e) {
+            file.fail(e.what());
+        }
         const bool smaller = deflated.size > 0;
         const std::uint64_t at = file.tell();
         put_le32(table, static_cast<std::uint32_t>(at));
