@@ -6,18 +6,25 @@
 //    mapping the camera onto the display with some distortion);
 //  - every 100th camera pixel (a defect) adds 200 display pixels scattered over the whole display;
 // about 3.2 x 10^5 nonzeros. All features, with a reference mean (so the Deflection channels too).
+// BM_Previews writes every channel's preview PNG (features/Plot.h), one after another on one
+// thread, into a temporary folder: what a render's write stage spends per preview; tile 10
+// repeats each channel 10 x 10 times, a 1000 x 1000 preview as the industrial scene's.
 // Usage: bench_features --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // (the median of the 5 repetitions is the figure to quote; "threads" is the TBB limit).
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "features/Features.h"
+#include "features/Plot.h"
 
 using namespace ltm;
 
@@ -99,6 +106,37 @@ void BM_AllFeatures(benchmark::State& state) {
         benchmark::Counter(static_cast<double>(s.T.rows), benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_AllFeatures)->ArgName("threads")->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Previews(benchmark::State& state) {
+    const Synthetic& s = synthetic();
+    const DisplayGrid display{kQ, kP, kWidth, kHeight};
+    const FeatureImages f = compute_features(s.T, kN, kM, display, FeatureOptions{}, &s.reference);
+    // tile: every channel repeated tile x tile times (10: 1000 x 1000, the industrial scene's).
+    const int tile = static_cast<int>(state.range(0)), w = kN * tile, h = kM * tile;
+    std::vector<std::pair<std::string, std::vector<float>>> channels;
+    for (const auto& [name, values] : f.channels) {
+        std::vector<float> v(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+        for (int m = 0; m < h; ++m)
+            for (int n = 0; n < w; ++n)
+                v[static_cast<std::size_t>(m) * static_cast<std::size_t>(w) + static_cast<std::size_t>(n)] =
+                    values[static_cast<std::size_t>(m % kM) * kN + static_cast<std::size_t>(n % kN)];
+        channels.emplace_back(name, std::move(v));
+    }
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("ltm-bench-previews-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const int scale = std::max(1, 400 / w);  // as a render's write stage (app/FeatureOutputs.cpp)
+    for (auto _ : state)
+        for (const auto& [name, values] : channels)
+            write_pseudo_colour_png((dir / (name + ".png")).string(), values, w, h, feature_title(name), NAN, NAN,
+                                    scale, ImageExtent{kWidth, kHeight});
+    fs::remove_all(dir);
+    state.counters["previews"] = static_cast<double>(channels.size());
+    // seconds per preview, printed with an SI prefix (m: milliseconds)
+    state.counters["s_per_preview"] = benchmark::Counter(
+        static_cast<double>(channels.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_Previews)->ArgName("tile")->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

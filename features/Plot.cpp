@@ -6,6 +6,7 @@
 #include <cairo.h>
 #include <ft2build.h>
 #include FT_FREETYPE_H
+#include <emmintrin.h>  // SSE2: colour_range
 
 #include <algorithm>
 #include <cmath>
@@ -279,7 +280,8 @@ public:
     }
 
     // The picture as drawn: its RGB code values (in the PictureMemory's storage, if one was given).
-    Image8 codes() {
+    // The pixels of `hole` are left as they were: the caller writes them itself.
+    Image8 codes(const Box& hole = {}) {
         cairo_surface_flush(surface_);
         const int w = cairo_image_surface_get_width(surface_), h = cairo_image_surface_get_height(surface_);
         const int stride = cairo_image_surface_get_stride(surface_);
@@ -291,13 +293,24 @@ public:
         if (memory_) img.data = std::move(memory_->picture);
         img.data.resize(3 * static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
         std::uint8_t* out = img.data.data();
-        for (int r = 0; r < h; ++r) {
+        const auto convert = [&](int r, int c0, int c1) {
             const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(r) * stride);
-            for (int c = 0; c < w; ++c) {
+            std::uint8_t* o = out + 3 * (static_cast<std::size_t>(r) * static_cast<std::size_t>(w) + static_cast<std::size_t>(c0));
+            for (int c = c0; c < c1; ++c) {
                 const std::uint32_t p = row[c];  // CAIRO_FORMAT_RGB24: 0x00RRGGBB
-                *out++ = static_cast<std::uint8_t>(p >> 16);
-                *out++ = static_cast<std::uint8_t>(p >> 8);
-                *out++ = static_cast<std::uint8_t>(p);
+                *o++ = static_cast<std::uint8_t>(p >> 16);
+                *o++ = static_cast<std::uint8_t>(p >> 8);
+                *o++ = static_cast<std::uint8_t>(p);
+            }
+        };
+        const int hx0 = std::clamp(static_cast<int>(hole.x), 0, w), hx1 = std::clamp(static_cast<int>(hole.x + hole.w), hx0, w);
+        const int hy0 = std::clamp(static_cast<int>(hole.y), 0, h), hy1 = std::clamp(static_cast<int>(hole.y + hole.h), hy0, h);
+        for (int r = 0; r < h; ++r) {
+            if (r < hy0 || r >= hy1) {
+                convert(r, 0, w);
+            } else {
+                convert(r, 0, hx0);
+                convert(r, hx1, w);
             }
         }
         return img;
@@ -584,12 +597,30 @@ bool ImageExtent::known() const { return std::isfinite(width) && std::isfinite(h
 std::pair<double, double> colour_range(const std::vector<float>& values, double lo, double hi) {
     if (std::isinf(lo) || std::isinf(hi)) throw std::invalid_argument("colour range: lo and hi must be finite or NaN");
     if (std::isnan(lo) || std::isnan(hi)) {
-        double mn = std::numeric_limits<double>::infinity(), mx = -mn;
-        for (const float v : values)
-            if (std::isfinite(v)) {
-                mn = std::min(mn, static_cast<double>(v));
-                mx = std::max(mx, static_cast<double>(v));
-            }
+        // In float, branch-free (the smallest and largest float are the same numbers as doubles):
+        // a preview of 10^6 pixels scans them all.
+        // Four running minima and maxima in SSE lanes (x86-64's baseline): a NaN or an infinity
+        // stands in as +inf for the minimum and -inf for the maximum. A preview of 10^6 pixels
+        // scans them all; a scalar loop was a tenth of the industrial scene's preview time.
+        constexpr float kBig = std::numeric_limits<float>::max(), kInf = std::numeric_limits<float>::infinity();
+        const std::size_t n = values.size(), whole = n - n % 4;
+        const float* const p = values.data();
+        const __m128 big = _mm_set1_ps(kBig), inf = _mm_set1_ps(kInf), minus_inf = _mm_set1_ps(-kInf);
+        const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
+        __m128 lane_mn = inf, lane_mx = minus_inf;
+        for (std::size_t i = 0; i < whole; i += 4) {
+            const __m128 v = _mm_loadu_ps(p + i);
+            const __m128 finite = _mm_cmple_ps(_mm_and_ps(v, magnitude), big);  // false for NaN, +-inf
+            lane_mn = _mm_min_ps(lane_mn, _mm_or_ps(_mm_and_ps(finite, v), _mm_andnot_ps(finite, inf)));
+            lane_mx = _mm_max_ps(lane_mx, _mm_or_ps(_mm_and_ps(finite, v), _mm_andnot_ps(finite, minus_inf)));
+        }
+        float mns[4], mxs[4];
+        _mm_storeu_ps(mns, lane_mn);
+        _mm_storeu_ps(mxs, lane_mx);
+        float fmn = std::min({mns[0], mns[1], mns[2], mns[3]}), fmx = std::max({mxs[0], mxs[1], mxs[2], mxs[3]});
+        for (std::size_t i = whole; i < n; ++i)
+            if (std::fabs(p[i]) <= kBig) fmn = std::min(fmn, p[i]), fmx = std::max(fmx, p[i]);
+        double mn = fmn, mx = fmx;
         if (mn > mx) mn = 0, mx = 1;  // no finite value
         if (std::isnan(lo)) lo = mn;
         if (std::isnan(hi)) hi = mx;
@@ -599,6 +630,16 @@ std::pair<double, double> colour_range(const std::vector<float>& values, double 
     if (lo == hi) lo -= 0.5, hi += 0.5;
     return {lo, hi};
 }
+
+namespace {
+// Whether v is a whole number, or NaN or +-inf, without a call to floor (x86-64's baseline has
+// no rounding instruction): a float of magnitude 2^23 or more is whole, and a smaller one is
+// whole exactly when truncating it to an integer gives it back.
+bool whole_or_not_finite(float v) {
+    const float a = std::fabs(v);
+    return !(a <= std::numeric_limits<float>::max()) || a >= 0x1p23f || static_cast<float>(static_cast<std::int32_t>(v)) == v;
+}
+}  // namespace
 
 PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int width, int height,
                                         const std::string& title, double lo, double hi, int pixel_scale,
@@ -635,8 +676,7 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
     {
         // Whole numbers only (counts, indices, a mask) get whole-number ticks.
         bool whole = std::floor(L.lo) == L.lo && std::floor(L.hi) == L.hi;
-        for (std::size_t k = 0; k < values.size() && whole; ++k)
-            whole = !std::isfinite(values[k]) || std::floor(values[k]) == values[k];
+        for (std::size_t k = 0; k < values.size() && whole; ++k) whole = whole_or_not_finite(values[k]);
         AxisTicks bar = axis_ticks(L.lo, L.hi, L.bar_h - 1.0, along_y, whole);
         L.tick_values = std::move(bar.values);
         L.tick_labels = std::move(bar.labels);
@@ -712,6 +752,49 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
 
 namespace {
 
+// The data cells of pseudo_colour's picture: cell (m, n) is the pixel_scale x pixel_scale block at
+// (image_x + n * pixel_scale, image_y + m * pixel_scale) in viridis((v - lo) / (hi - lo)); NaN
+// stays NaN (kNanColour) and +-inf clamp to the ends.
+void paint_cells(Image& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
+                 int pixel_scale) {
+    const double range = L.hi - L.lo;
+    for (int m = 0; m < height; ++m)
+        for (int n = 0; n < width; ++n) {
+            const double v = values[static_cast<std::size_t>(m) * static_cast<std::size_t>(width) + static_cast<std::size_t>(n)];
+            fill_rect(img, L.image_x + n * pixel_scale, L.image_y + m * pixel_scale, pixel_scale, pixel_scale,
+                      viridis((v - L.lo) / range));
+        }
+}
+// The same cells in code values, the same codes as fill_rect's, computed row by row: a cell's code
+// once (and once for a run of equal values: feature maps hold long runs of counts and zeros), put
+// pixel_scale times across, and the finished pixel row copied pixel_scale - 1 times down. Cell by
+// cell through fill_rect this was half of the industrial scene's preview time (perf: 17 previews
+// of 1000 x 1000 cells, one fill_rect and one viridis a pixel).
+void paint_cells(Image8& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
+                 int pixel_scale) {
+    if (L.image_x < 0 || L.image_y < 0 || L.image_x + width * pixel_scale > img.width ||
+        L.image_y + height * pixel_scale > img.height || img.channels != 3)
+        throw std::logic_error("pseudo_colour: the image block lies outside its picture");
+    const double range = L.hi - L.lo;
+    const std::size_t stride = 3 * static_cast<std::size_t>(img.width), row_bytes = 3 * static_cast<std::size_t>(width) * pixel_scale;
+    for (int m = 0; m < height; ++m) {
+        std::uint8_t* const row = img.data.data() + static_cast<std::size_t>(L.image_y + m * pixel_scale) * stride +
+                                  3 * static_cast<std::size_t>(L.image_x);
+        const float* const v = values.data() + static_cast<std::size_t>(m) * static_cast<std::size_t>(width);
+        std::uint8_t code[3] = {};
+        std::uint8_t* out = row;
+        for (int n = 0; n < width; ++n) {
+            // Equal bits, equal colour (NaN included, whose colour does not depend on its bits).
+            if (n == 0 || std::memcmp(&v[n], &v[n - 1], sizeof(float)) != 0) {
+                const Rgb c = viridis((v[n] - L.lo) / range);
+                for (int k = 0; k < 3; ++k) code[k] = png_code(c[static_cast<std::size_t>(k)]);
+            }
+            for (int s = 0; s < pixel_scale; ++s, out += 3) std::memcpy(out, code, 3);
+        }
+        for (int s = 1; s < pixel_scale; ++s) std::memcpy(row + static_cast<std::size_t>(s) * stride, row, row_bytes);
+    }
+}
+
 // pseudo_colour's picture as a float Image or, for a PNG, straight in code values (Image8): the
 // same drawing, the same pixels (fill_rect stores png_code of the colour that the Image holds).
 template <class Picture>
@@ -739,18 +822,13 @@ Picture draw_pseudo_colour(const std::vector<float>& values, int width, int heig
     for (const Label& l : L.labels) canvas.draw(l);
     Picture img;
     if constexpr (std::is_same_v<Picture, Image8>)
-        img = canvas.codes();
+        img = canvas.codes({static_cast<double>(L.image_x), static_cast<double>(L.image_y),
+                            static_cast<double>(width * pixel_scale), static_cast<double>(height * pixel_scale)});
     else
         img = canvas.image();
 
     // The data and the colour bar, exact: written into the picture, not drawn.
-    const double range = L.hi - L.lo;
-    for (int m = 0; m < height; ++m)
-        for (int n = 0; n < width; ++n) {
-            const double v = values[static_cast<std::size_t>(m) * static_cast<std::size_t>(width) + static_cast<std::size_t>(n)];
-            const Rgb c = viridis((v - L.lo) / range);  // NaN stays NaN; +-inf clamp to the ends
-            fill_rect(img, L.image_x + n * pixel_scale, L.image_y + m * pixel_scale, pixel_scale, pixel_scale, c);
-        }
+    paint_cells(img, values, width, height, L, pixel_scale);
     for (int r = 0; r < L.bar_h; ++r)
         fill_rect(img, L.bar_x, L.bar_y + r, L.bar_w, 1, viridis(1.0 - static_cast<double>(r) / (L.bar_h - 1)));
     return img;

@@ -9,7 +9,9 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -755,24 +757,50 @@ TEST(Histogram, LogarithmicX) {
 
 // ---- PNG ----
 
+// The PNG's codes are png_code of pseudo_colour's float picture, pixel for pixel: the PNG path
+// paints the cells itself, row by row, reusing a cell's code along a run of equal values, so the
+// values hold runs (of numbers, of NaNs with different bits, of +-inf) as well as a ramp, and are
+// drawn at a pixel scale of 1 and of 4.
 TEST(PseudoColourPng, ReadableAndTheSameCodes) {
     const fs::path dir = fs::temp_directory_path() / ("ltm_plot_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const std::string file = (dir / "ramp.png").string();
     std::vector<float> v = ramp(20, 10);
     v[3] = static_cast<float>(kNaN);
-    ltm::write_pseudo_colour_png(file, v, 20, 10, "T", 0.0, 1.0, 4, {5, 2.5});
-    const Image back = ltm::read_image(file);
-    const Image expected = ltm::pseudo_colour(v, 20, 10, "T", 0.0, 1.0, 4, {5, 2.5});
-    const auto L = ltm::pseudo_colour_layout(v, 20, 10, "T", 0.0, 1.0, 4, {5, 2.5});
-    EXPECT_EQ(back.width, L.width);
-    EXPECT_EQ(back.height, L.height);
-    ASSERT_EQ(back.channels, 3);
-    ASSERT_EQ(back.data.size(), expected.data.size());
-    for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
-    // a data cell's stored code is the viridis colour's
-    const Rgb c = ltm::viridis(v[5]);
-    for (int k = 0; k < 3; ++k) EXPECT_EQ(code(back.at(L.image_y + 1, L.image_x + 5 * 4 + 1, k)), code(c[static_cast<std::size_t>(k)]));
+    for (int k = 40; k < 47; ++k) v[static_cast<std::size_t>(k)] = 0.25f;          // a run across cells
+    for (int k = 59; k < 62; ++k) v[static_cast<std::size_t>(k)] = 0.75f;          // a run across a row's end
+    v[80] = std::numeric_limits<float>::infinity();
+    v[81] = std::numeric_limits<float>::infinity();
+    v[82] = -std::numeric_limits<float>::infinity();
+    const std::uint32_t nan_bits[2] = {0x7FC00001u, 0xFFC00000u};                // NaNs of other bits
+    std::memcpy(&v[90], &nan_bits[0], sizeof(float));
+    std::memcpy(&v[91], &nan_bits[1], sizeof(float));
+    v[92] = v[91];
+    for (const int scale : {4, 1}) {
+        SCOPED_TRACE("pixel scale " + std::to_string(scale));
+        ltm::write_pseudo_colour_png(file, v, 20, 10, "T", 0.0, 1.0, scale, {5, 2.5});
+        const Image back = ltm::read_image(file);
+        const Image expected = ltm::pseudo_colour(v, 20, 10, "T", 0.0, 1.0, scale, {5, 2.5});
+        const auto L = ltm::pseudo_colour_layout(v, 20, 10, "T", 0.0, 1.0, scale, {5, 2.5});
+        EXPECT_EQ(back.width, L.width);
+        EXPECT_EQ(back.height, L.height);
+        ASSERT_EQ(back.channels, 3);
+        ASSERT_EQ(back.data.size(), expected.data.size());
+        for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
+        // a data cell's stored code is the viridis colour's; NaN's is kNanColour's, +-inf the ends'
+        const auto cell = [&](int k, int c) {
+            return code(back.at(L.image_y + (k / 20) * scale, L.image_x + (k % 20) * scale + scale - 1, c));
+        };
+        for (int c = 0; c < 3; ++c) {
+            const auto i = static_cast<std::size_t>(c);
+            EXPECT_EQ(cell(5, c), code(ltm::viridis(v[5])[i]));
+            EXPECT_EQ(cell(46, c), code(ltm::viridis(0.25)[i]));
+            EXPECT_EQ(cell(60, c), code(ltm::viridis(0.75)[i]));
+            EXPECT_EQ(cell(81, c), code(ltm::viridis(1.0)[i]));
+            EXPECT_EQ(cell(82, c), code(ltm::viridis(0.0)[i]));
+            for (const int k : {3, 90, 91, 92}) EXPECT_EQ(cell(k, c), code(ltm::kNanColour[i])) << k;
+        }
+    }
     fs::remove_all(dir);
 }
 
