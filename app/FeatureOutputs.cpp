@@ -141,13 +141,11 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
             },
             [&] {
                 if (scene.defects.empty()) return;
-                std::vector<float> mx(run.reference.size() / 2), my(run.reference.size() / 2);
-                for (size_t k = 0; k < mx.size(); ++k) {
-                    mx[k] = run.reference[2 * k];
-                    my[k] = run.reference[2 * k + 1];
-                }
+                // The interleaved x, y means, read in place (copies of them page-faulted 16 MB
+                // fresh at industrial scale, about 40 ms).
+                const std::size_t pixels = run.reference.size() / 2;
                 write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
-                          {{"MeanX", mx}, {"MeanY", my}});
+                          {{"MeanX", run.reference.data(), pixels, 2}, {"MeanY", run.reference.data() + 1, pixels, 2}});
             },
             [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}, previews); });
         t_write.done(dir);

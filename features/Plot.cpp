@@ -173,6 +173,17 @@ struct PictureMemory {
     std::vector<std::uint8_t> picture;
 };
 
+// v resized to n for bytes the caller overwrites: a v too small is replaced by a fresh one with an
+// eighth more room (for the next, slightly larger picture) instead of grown, which would copy the
+// old bytes into new pages and fault each page twice.
+void reuse(std::vector<std::uint8_t>& v, std::size_t n) {
+    if (v.capacity() < n) {
+        std::vector<std::uint8_t>().swap(v);
+        v.reserve(n + n / 8);
+    }
+    v.resize(n);
+}
+
 class Canvas {
 public:
     // memory (optional): where the surface's pixels live (Cairo's own allocation without it).
@@ -182,7 +193,7 @@ public:
             if (stride < 0)
                 throw std::runtime_error("Cairo: cannot make a " + std::to_string(width) + " x " + std::to_string(height) +
                                          " canvas: the width is too large");
-            memory_->surface.resize(static_cast<std::size_t>(stride) * static_cast<std::size_t>(height > 0 ? height : 0));
+            reuse(memory_->surface, static_cast<std::size_t>(stride) * static_cast<std::size_t>(height > 0 ? height : 0));
             surface_ = cairo_image_surface_create_for_data(memory_->surface.data(), CAIRO_FORMAT_RGB24, width, height,
                                                            stride);
         } else {
@@ -291,7 +302,7 @@ public:
         img.height = h;
         img.channels = 3;
         if (memory_) img.data = std::move(memory_->picture);
-        img.data.resize(3 * static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+        reuse(img.data, 3 * static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
         std::uint8_t* out = img.data.data();
         const auto convert = [&](int r, int c0, int c1) {
             const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(r) * stride);

@@ -11,6 +11,7 @@
 // of an EXR file (as OpenEXR's ZIP compression reads them) and the rows of a PNG file.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace ltm::io {
@@ -38,8 +39,22 @@ inline constexpr std::size_t kMaxDeflatePiece = 0xFFFFFFFFu - (16u << 20);
 Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit);
 
 // A byte buffer of the calling thread's for `slot` (0..3), at least n bytes long, kept between
-// calls for the same reason: for the pictures and blocks io/Image.cpp encodes.
+// calls for the same reason: for the pictures and blocks io/Image.cpp encodes. Its bytes are
+// undefined until the caller writes them: a buffer that grows is replaced, not copied, and a new
+// one is not cleared, so that only the pages written are faulted in (a copy and a clearing
+// faulted each page up to three times).
 unsigned char* thread_buffer(int slot, std::size_t n);
+
+// Room a thread keeps for scratch bytes it fully writes before it reads them: grown (with an
+// eighth more, for the next slightly larger picture) by a fresh, uncleared allocation.
+class ScratchBytes {
+public:
+    unsigned char* get(std::size_t n);
+
+private:
+    std::unique_ptr<unsigned char[]> bytes_;
+    std::size_t capacity_ = 0;
+};
 
 // The CRC-32 of ZIP, gzip and PNG (ISO 3309, reflected, as zlib's crc32) of p[0, n), continuing
 // from `crc` (0 to start): crc32(crc32(0, a), b) is the CRC of a followed by b.

@@ -410,19 +410,27 @@ void write_png16(const std::string& path, int width, int height, const std::vect
 
 void write_exr(const std::string& path, int width, int height,
                const std::vector<std::pair<std::string, std::vector<float>>>& channels) {
+    std::vector<ExrChannelView> views;
+    views.reserve(channels.size());
+    for (const auto& [name, values] : channels) views.push_back({name, values.data(), values.size(), 1});
+    write_exr(path, width, height, views);
+}
+
+void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannelView>& channels) {
     auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write EXR image '" + path + "': " + why); };
     if (width <= 0 || height <= 0)
         fail("the image is empty (" + std::to_string(width) + " x " + std::to_string(height) + ")");
     if (channels.empty()) fail("no channels given");
     const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     std::set<std::string> names;
-    for (const auto& [name, values] : channels) {
-        if (name.empty()) fail("a channel has an empty name");
-        if (name.size() > 255) fail("the channel name '" + name + "' is longer than 255 characters");
-        if (!names.insert(name).second) fail("two channels are named '" + name + "'");
-        if (values.size() != n)
-            fail("channel '" + name + "' has " + std::to_string(values.size()) + " values, expected " +
+    for (const ExrChannelView& c : channels) {
+        if (c.name.empty()) fail("a channel has an empty name");
+        if (c.name.size() > 255) fail("the channel name '" + c.name + "' is longer than 255 characters");
+        if (!names.insert(c.name).second) fail("two channels are named '" + c.name + "'");
+        if (c.count != n)
+            fail("channel '" + c.name + "' has " + std::to_string(c.count) + " values, expected " +
                  std::to_string(width) + " x " + std::to_string(height) + " = " + std::to_string(n));
+        if (c.stride == 0 || (n > 0 && !c.values)) fail("channel '" + c.name + "' has no values");
     }
     // A block's size is a 32-bit signed integer in the file.
     if (static_cast<double>(kExrZipLines) * static_cast<double>(width) * 4.0 * static_cast<double>(channels.size()) >
@@ -430,15 +438,15 @@ void write_exr(const std::string& path, int width, int height,
         fail("the image is too wide for EXR's blocks of 16 scan lines (" + std::to_string(width) + " pixels, " +
              std::to_string(channels.size()) + " channels)");
     // The channels in the file's order: sorted by name, byte by byte (OpenEXR's ChannelList).
-    std::vector<const std::pair<std::string, std::vector<float>>*> sorted;
+    std::vector<const ExrChannelView*> sorted;
     for (const auto& c : channels) sorted.push_back(&c);
-    std::sort(sorted.begin(), sorted.end(), [](const auto* a, const auto* b) { return a->first < b->first; });
+    std::sort(sorted.begin(), sorted.end(), [](const auto* a, const auto* b) { return a->name < b->name; });
 
     // The header (the attributes Imf::Header(width, height) gives, in OpenEXR's alphabetical
     // order, with ZIP compression), then the line offset table, then the blocks.
     std::string head("\x76\x2f\x31\x01", 4);  // magic number
     bool long_names = false;
-    for (const auto* c : sorted) long_names = long_names || c->first.size() > 31;
+    for (const auto* c : sorted) long_names = long_names || c->name.size() > 31;
     put_le32(head, 2u | (long_names ? 0x400u : 0u));  // version 2, single-part scan lines
     const auto attribute = [&](const char* name, const char* type, const std::string& value) {
         head += name;
@@ -450,7 +458,7 @@ void write_exr(const std::string& path, int width, int height,
     };
     std::string chlist, window, one, centre;
     for (const auto* c : sorted) {
-        chlist += c->first;
+        chlist += c->name;
         chlist += '\0';
         put_le32(chlist, 2);                  // pixel type FLOAT
         chlist += std::string(4, '\0');       // pLinear 0, three reserved bytes
@@ -493,22 +501,28 @@ void write_exr(const std::string& path, int width, int height,
         unsigned char* p = pixels;
         for (int y = y0; y < y0 + lines; ++y)
             for (const auto* c : sorted) {
-                const float* v = c->second.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(width);
-                if constexpr (io::detail::kHostLittle) {
+                const float* v = c->values + static_cast<std::size_t>(y) * static_cast<std::size_t>(width) * c->stride;
+                if (io::detail::kHostLittle && c->stride == 1) {
                     std::memcpy(p, v, row);
                     p += row;
                 } else {
                     for (int x = 0; x < width; ++x, p += 4) {
                         std::uint32_t u;
-                        std::memcpy(&u, v + x, 4);
+                        std::memcpy(&u, v + static_cast<std::size_t>(x) * c->stride, 4);
                         for (int k = 0; k < 4; ++k) p[k] = static_cast<unsigned char>(u >> (8 * k));
                     }
                 }
             }
+        // The split and the differences in one pass: split[j] is the j-th byte of the even-indexed
+        // bytes followed by the odd-indexed ones, stored as its difference from split[j - 1] + 128.
         unsigned char* const split = io::thread_buffer(1, size);
         const std::size_t half = (size + 1) / 2;
-        for (std::size_t i = 0; i < size; ++i) split[(i & 1) ? half + i / 2 : i / 2] = pixels[i];
-        for (std::size_t i = size; i-- > 1;) split[i] = static_cast<unsigned char>(split[i] - split[i - 1] + 128);
+        split[0] = pixels[0];
+        for (std::size_t j = 1; j < half; ++j)
+            split[j] = static_cast<unsigned char>(pixels[2 * j] - pixels[2 * j - 2] + 128);
+        if (half < size) split[half] = static_cast<unsigned char>(pixels[1] - pixels[2 * (half - 1)] + 128);
+        for (std::size_t j = half + 1; j < size; ++j)
+            split[j] = static_cast<unsigned char>(pixels[2 * (j - half) + 1] - pixels[2 * (j - half) - 1] + 128);
         io::Deflated deflated;
         try {
             deflated = io::zlib_deflate(split, size, kExrZipLevel, size);

@@ -116,6 +116,16 @@ void write_png16(const std::string& path, int width, int height, const std::vect
 // tests. Atomic.
 void write_exr(const std::string& path, int width, int height,
                const std::vector<std::pair<std::string, std::vector<float>>>& channels);
+// The same from channels the caller holds elsewhere, without copying them: channel k's value at
+// pixel i is values[i * stride] (stride 2 writes the two halves of an interleaved x, y array);
+// count is how many pixels `values` holds, checked against width * height.
+struct ExrChannelView {
+    std::string name;
+    const float* values = nullptr;
+    std::size_t count = 0;
+    std::size_t stride = 1;
+};
+void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannelView>& channels);
 
 // The same channels as a numpy .npz archive (io/Npz.h): one float32 array of shape (height,
 // width) per channel, named as the channel, in C order (row 0 on top), so that numpy reads an

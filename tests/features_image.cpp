@@ -479,6 +479,39 @@ TEST_F(ImageTest, ExrRoundTripIsBitExactAndKeepsNames) {
 // long-names flag for a name over 31 characters (OpenEXR's rule), and every value bit for bit,
 // in deflated blocks (smooth values) and stored ones (noise), with a last block shorter than 16
 // lines. The independent parser above decodes the first block from the file's bytes with zlib.
+// Channels given as views of an interleaved x, y array (stride 2, as the render's reference
+// means) are written as the two halves would be: OpenEXR reads back each half bit for bit, and
+// the file's bytes are those of write_exr given the halves as vectors. A view of the wrong count
+// is refused with the path.
+TEST_F(ImageTest, StridedChannelViewsWriteTheHalvesOfAnInterleavedArray) {
+    const int w = 29, h = 21;
+    const std::size_t n = static_cast<std::size_t>(w * h);
+    std::vector<float> xy(2 * n);
+    std::mt19937 rng(5);
+    for (auto& v : xy) v = std::uniform_real_distribution<float>(-50.0f, 50.0f)(rng);
+    std::vector<float> x(n), y(n);
+    for (std::size_t i = 0; i < n; ++i) x[i] = xy[2 * i], y[i] = xy[2 * i + 1];
+    ltm::write_exr(path("views.exr"), w, h, std::vector<ltm::ExrChannelView>{{"MeanX", xy.data(), n, 2}, {"MeanY", xy.data() + 1, n, 2}});
+    ltm::write_exr(path("vectors.exr"), w, h, {{"MeanX", x}, {"MeanY", y}});
+    EXPECT_EQ(slurp(path("views.exr")), slurp(path("vectors.exr")));
+    int rw = 0, rh = 0;
+    const auto back = ltm::read_exr_channels(path("views.exr"), &rw, &rh);
+    ASSERT_EQ(back.size(), 2u);
+    EXPECT_EQ(rw, w);
+    EXPECT_EQ(rh, h);
+    EXPECT_EQ(back[0].first, "MeanX");
+    EXPECT_TRUE(bit_equal(back[0].second, x));
+    EXPECT_EQ(back[1].first, "MeanY");
+    EXPECT_TRUE(bit_equal(back[1].second, y));
+    try {
+        ltm::write_exr(path("short.exr"), w, h, std::vector<ltm::ExrChannelView>{{"MeanX", xy.data(), n - 1, 2}});
+        ADD_FAILURE() << "a view of n - 1 values was accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("short.exr"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(path("short.exr")));
+}
+
 TEST_F(ImageTest, OpenExrReadsTheHeaderAndEveryBlockWriteExrLaysOut) {
     const int w = 37, h = 45;  // blocks of 16, 16 and 13 lines
     const std::size_t n = static_cast<std::size_t>(w * h);
