@@ -166,12 +166,37 @@ cairo_font_face_t* font_face() {
 // slight hinting, metrics rounded to whole pixels; fixed here, not taken from the machine).
 // Memory a caller keeps for pictures it draws again and again (the previews of every render):
 // every page of a fresh picture costs a page fault, about 10 us on a virtual machine, which was a
-// quarter of the default scene's write stage (perf). A Canvas given one draws into `surface`
-// and codes() returns its picture in `picture`'s storage; the caller hands the storage back.
+// quarter of the default scene's write stage (perf). A Canvas given one draws into `surface`.
 struct PictureMemory {
     std::vector<unsigned char> surface;
-    std::vector<std::uint8_t> picture;
 };
+
+// A picture as a Cairo surface holds it: each pixel a 32-bit word 0x00RRGGBB (CAIRO_FORMAT_RGB24,
+// in native byte order), rows `stride` words apart. A preview's cells are painted straight into
+// its Canvas's surface and its PNG rows read from there: no RGB copy of the picture is made.
+struct SurfacePicture {
+    int width = 0, height = 0;
+    std::uint32_t* pixels = nullptr;
+    std::size_t stride = 0;
+};
+
+// n pixels 0x00RRGGBB (CAIRO_FORMAT_RGB24) as 3n RGB code values.
+// Four bytes stored a pixel, three advanced (the fourth is the next pixel's first), the last
+// pixel byte by byte: a preview's rows are converted as they are deflated.
+void rgb_codes(const std::uint32_t* row, int n, std::uint8_t* out) {
+    for (int c = 0; c + 1 < n; ++c, out += 3) {
+        const std::uint32_t p = row[c];
+        const std::uint8_t rgbx[4] = {static_cast<std::uint8_t>(p >> 16), static_cast<std::uint8_t>(p >> 8),
+                                      static_cast<std::uint8_t>(p), 0};
+        std::memcpy(out, rgbx, 4);
+    }
+    if (n > 0) {
+        const std::uint32_t p = row[n - 1];
+        out[0] = static_cast<std::uint8_t>(p >> 16);
+        out[1] = static_cast<std::uint8_t>(p >> 8);
+        out[2] = static_cast<std::uint8_t>(p);
+    }
+}
 
 // v resized to n for bytes the caller overwrites: a v too small is replaced by a fresh one with an
 // eighth more room (for the next, slightly larger picture) instead of grown, which would copy the
@@ -290,9 +315,20 @@ public:
         cairo_fill(cr_);
     }
 
-    // The picture as drawn: its RGB code values (in the PictureMemory's storage, if one was given).
-    // The pixels of `hole` are left as they were: the caller writes them itself.
-    Image8 codes(const Box& hole = {}) {
+    // The picture as drawn, in the surface's memory (a Canvas drawing into a PictureMemory only:
+    // Cairo's own memory goes with the Canvas).
+    SurfacePicture surface_picture() {
+        if (!memory_) throw std::logic_error("Canvas: a surface picture of a canvas without its PictureMemory");
+        cairo_surface_flush(surface_);
+        SurfacePicture p;
+        p.width = cairo_image_surface_get_width(surface_);
+        p.height = cairo_image_surface_get_height(surface_);
+        p.pixels = reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(surface_));
+        p.stride = static_cast<std::size_t>(cairo_image_surface_get_stride(surface_)) / 4;
+        return p;
+    }
+    // The picture as drawn: its RGB code values.
+    Image8 codes() {
         cairo_surface_flush(surface_);
         const int w = cairo_image_surface_get_width(surface_), h = cairo_image_surface_get_height(surface_);
         const int stride = cairo_image_surface_get_stride(surface_);
@@ -301,29 +337,10 @@ public:
         img.width = w;
         img.height = h;
         img.channels = 3;
-        if (memory_) img.data = std::move(memory_->picture);
-        reuse(img.data, 3 * static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
-        std::uint8_t* out = img.data.data();
-        const auto convert = [&](int r, int c0, int c1) {
-            const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(r) * stride);
-            std::uint8_t* o = out + 3 * (static_cast<std::size_t>(r) * static_cast<std::size_t>(w) + static_cast<std::size_t>(c0));
-            for (int c = c0; c < c1; ++c) {
-                const std::uint32_t p = row[c];  // CAIRO_FORMAT_RGB24: 0x00RRGGBB
-                *o++ = static_cast<std::uint8_t>(p >> 16);
-                *o++ = static_cast<std::uint8_t>(p >> 8);
-                *o++ = static_cast<std::uint8_t>(p);
-            }
-        };
-        const int hx0 = std::clamp(static_cast<int>(hole.x), 0, w), hx1 = std::clamp(static_cast<int>(hole.x + hole.w), hx0, w);
-        const int hy0 = std::clamp(static_cast<int>(hole.y), 0, h), hy1 = std::clamp(static_cast<int>(hole.y + hole.h), hy0, h);
-        for (int r = 0; r < h; ++r) {
-            if (r < hy0 || r >= hy1) {
-                convert(r, 0, w);
-            } else {
-                convert(r, 0, hx0);
-                convert(r, hx1, w);
-            }
-        }
+        img.data.resize(3 * static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+        for (int r = 0; r < h; ++r)
+            rgb_codes(reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(r) * stride), w,
+                      img.data.data() + 3 * static_cast<std::size_t>(r) * static_cast<std::size_t>(w));
         return img;
     }
     // The picture as an RGB Image, each channel code / 255.
@@ -348,16 +365,18 @@ void fill_rect(Image& img, int x, int y, int w, int h, const Rgb& c) {
         for (int col = c0; col < c1; ++col)
             for (int k = 0; k < 3; ++k) img.at(r, col, k) = c[static_cast<std::size_t>(k)];
 }
-// The same in code values: png_code of each channel, what write_png would store for c.
-void fill_rect(Image8& img, int x, int y, int w, int h, const Rgb& c) {
+// The same in a surface: png_code of each channel, what write_png would store for c, as the
+// pixel word 0x00RRGGBB.
+std::uint32_t pixel_word(const std::uint8_t code[3]) {
+    return static_cast<std::uint32_t>(code[0]) << 16 | static_cast<std::uint32_t>(code[1]) << 8 | code[2];
+}
+void fill_rect(SurfacePicture& img, int x, int y, int w, int h, const Rgb& c) {
     const std::uint8_t code[3] = {png_code(c[0]), png_code(c[1]), png_code(c[2])};
+    const std::uint32_t word = pixel_word(code);
     const int r0 = std::max(y, 0), r1 = std::min(y + h, img.height);
     const int c0 = std::max(x, 0), c1 = std::min(x + w, img.width);
-    for (int r = r0; r < r1; ++r) {
-        std::uint8_t* out = img.data.data() + (static_cast<std::size_t>(r) * static_cast<std::size_t>(img.width) +
-                                               static_cast<std::size_t>(c0)) * 3;
-        for (int col = c0; col < c1; ++col, out += 3) std::memcpy(out, code, 3);
-    }
+    for (int r = r0; r < r1; ++r) std::fill(img.pixels + static_cast<std::size_t>(r) * img.stride + c0,
+                                            img.pixels + static_cast<std::size_t>(r) * img.stride + c1, word);
 }
 
 // A pixel-crisp position for a 1-pixel line near coordinate v in [0, n]: the middle of the pixel
@@ -781,33 +800,65 @@ void paint_cells(Image& img, const std::vector<float>& values, int width, int he
 // pixel_scale times across, and the finished pixel row copied pixel_scale - 1 times down. Cell by
 // cell through fill_rect this was half of the industrial scene's preview time (perf: 17 previews
 // of 1000 x 1000 cells, one fill_rect and one viridis a pixel).
-void paint_cells(Image8& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
+void paint_cells(SurfacePicture& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
                  int pixel_scale) {
     if (L.image_x < 0 || L.image_y < 0 || L.image_x + width * pixel_scale > img.width ||
-        L.image_y + height * pixel_scale > img.height || img.channels != 3)
+        L.image_y + height * pixel_scale > img.height)
         throw std::logic_error("pseudo_colour: the image block lies outside its picture");
+    // viridis and png_code inlined, the same arithmetic: t clamped, s = 255 t, entry i = min(floor
+    // s, 254), f = s - i, each channel float(a + (b - a) f) of entries i and i + 1 in double, then
+    // rounded to its code. (viridis returns entry i itself at f = 0 and entry i + 1 at f = 1: the
+    // formula gives the same floats there, since b - a and a + (b - a) are exact in double for
+    // floats in [0, 1].) NaN is kNanColour.
+    struct Entry {
+        double a[3], d[3];
+    };
+    static const std::array<Entry, 255> entries = [] {
+        std::array<Entry, 255> e{};
+        for (std::size_t i = 0; i < 255; ++i)
+            for (std::size_t k = 0; k < 3; ++k) {
+                e[i].a[k] = kViridis[i][k];
+                e[i].d[k] = static_cast<double>(kViridis[i + 1][k]) - static_cast<double>(kViridis[i][k]);
+            }
+        return e;
+    }();
+    const std::uint8_t nan_code[3] = {png_code(kNanColour[0]), png_code(kNanColour[1]), png_code(kNanColour[2])};
+    const auto codes_of = [&](double t, std::uint8_t* code) {
+        if (std::isnan(t)) {
+            std::memcpy(code, nan_code, 3);
+            return;
+        }
+        t = std::clamp(t, 0.0, 1.0);
+        const double s = 255.0 * t;
+        const int i = std::min(static_cast<int>(s), 254);
+        const double f = s - i;
+        const Entry& e = entries[static_cast<std::size_t>(i)];
+        for (int k = 0; k < 3; ++k) code[k] = png_code(static_cast<float>(e.a[k] + e.d[k] * f));
+    };
     const double range = L.hi - L.lo;
-    const std::size_t stride = 3 * static_cast<std::size_t>(img.width), row_bytes = 3 * static_cast<std::size_t>(width) * pixel_scale;
+    const std::size_t row_bytes = sizeof(std::uint32_t) * static_cast<std::size_t>(width) * pixel_scale;
     for (int m = 0; m < height; ++m) {
-        std::uint8_t* const row = img.data.data() + static_cast<std::size_t>(L.image_y + m * pixel_scale) * stride +
-                                  3 * static_cast<std::size_t>(L.image_x);
+        std::uint32_t* const row = img.pixels + static_cast<std::size_t>(L.image_y + m * pixel_scale) * img.stride +
+                                   static_cast<std::size_t>(L.image_x);
         const float* const v = values.data() + static_cast<std::size_t>(m) * static_cast<std::size_t>(width);
         std::uint8_t code[3] = {};
-        std::uint8_t* out = row;
+        std::uint32_t word = 0;
+        std::uint32_t* out = row;
         for (int n = 0; n < width; ++n) {
             // Equal bits, equal colour (NaN included, whose colour does not depend on its bits).
             if (n == 0 || std::memcmp(&v[n], &v[n - 1], sizeof(float)) != 0) {
-                const Rgb c = viridis((v[n] - L.lo) / range);
-                for (int k = 0; k < 3; ++k) code[k] = png_code(c[static_cast<std::size_t>(k)]);
+                codes_of((v[n] - L.lo) / range, code);
+                word = pixel_word(code);
             }
-            for (int s = 0; s < pixel_scale; ++s, out += 3) std::memcpy(out, code, 3);
+            for (int s = 0; s < pixel_scale; ++s) *out++ = word;
         }
-        for (int s = 1; s < pixel_scale; ++s) std::memcpy(row + static_cast<std::size_t>(s) * stride, row, row_bytes);
+        for (int s = 1; s < pixel_scale; ++s) std::memcpy(row + static_cast<std::size_t>(s) * img.stride, row, row_bytes);
     }
 }
 
-// pseudo_colour's picture as a float Image or, for a PNG, straight in code values (Image8): the
-// same drawing, the same pixels (fill_rect stores png_code of the colour that the Image holds).
+// pseudo_colour's picture as a float Image or, for a PNG, straight in code values in the Canvas's
+// surface (SurfacePicture, which needs `memory`): the same drawing, the same pixels (fill_rect
+// and paint_cells store png_code of the colour that the Image holds).
 template <class Picture>
 Picture draw_pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
                            double lo, double hi, int pixel_scale, const ImageExtent& extent,
@@ -832,9 +883,8 @@ Picture draw_pseudo_colour(const std::vector<float>& values, int width, int heig
     }
     for (const Label& l : L.labels) canvas.draw(l);
     Picture img;
-    if constexpr (std::is_same_v<Picture, Image8>)
-        img = canvas.codes({static_cast<double>(L.image_x), static_cast<double>(L.image_y),
-                            static_cast<double>(width * pixel_scale), static_cast<double>(height * pixel_scale)});
+    if constexpr (std::is_same_v<Picture, SurfacePicture>)
+        img = canvas.surface_picture();  // the surface lives on in `memory` after the Canvas
     else
         img = canvas.image();
 
@@ -856,9 +906,11 @@ void write_pseudo_colour_png(const std::string& path, const std::vector<float>& 
                              const std::string& title, double lo, double hi, int pixel_scale,
                              const ImageExtent& extent) {
     thread_local PictureMemory memory;  // kept by the thread for its next preview
-    Image8 picture = draw_pseudo_colour<Image8>(values, width, height, title, lo, hi, pixel_scale, extent, &memory);
-    write_png(path, picture);
-    memory.picture = std::move(picture.data);
+    const SurfacePicture picture =
+        draw_pseudo_colour<SurfacePicture>(values, width, height, title, lo, hi, pixel_scale, extent, &memory);
+    write_png_rows(path, picture.width, picture.height, 3, [&](int r, std::uint8_t* out) {
+        rgb_codes(picture.pixels + static_cast<std::size_t>(r) * picture.stride, picture.width, out);
+    });
 }
 
 // ---- montage ----

@@ -84,6 +84,14 @@ void AtomicFile::write(const void* bytes, std::size_t n) {
         n -= static_cast<std::size_t>(w);
         pos_ += static_cast<std::uint64_t>(w);
     }
+#ifdef __linux__
+    if (pos_ >= written_back_ + kWritebackBytes) {
+        // A failure here is not the file's: fsync in commit() reports any the disk has.
+        (void)::sync_file_range(fd_, static_cast<off_t>(written_back_), static_cast<off_t>(pos_ - written_back_),
+                                SYNC_FILE_RANGE_WRITE);
+        written_back_ = pos_;
+    }
+#endif
 }
 
 void AtomicFile::commit() {

@@ -67,6 +67,14 @@ public:
     std::uint64_t tell() const { return pos_; }
     void seek(std::uint64_t pos) { pos_ = pos; }
 
+    // Every kWritebackBytes written, the bytes since the last time are handed to the kernel's
+    // writeback (Linux's sync_file_range, SYNC_FILE_RANGE_WRITE: it starts the disk writes and
+    // does not wait for them), so that the disk writes while the caller computes the next bytes
+    // and commit's fsync waits only for the last few. Without it nothing reaches the disk before
+    // the fsync: an industrial render's outputs waited 0.22 s in fsync (strace), a fifth of the
+    // write stage's thread time. Only a hint: commit's fsync is what makes the bytes durable.
+    static constexpr std::uint64_t kWritebackBytes = 4u << 20;
+
     // fsync, close, rename onto path(), fsync the folder. After it, the object holds nothing; any
     // further write() or commit() is an error. If it throws, the temporary is gone and path() is as
     // it was before, except when only the final folder sync failed (the message says so): then
@@ -93,6 +101,7 @@ private:
     Mode mode_;
     int fd_ = -1;
     std::uint64_t pos_ = 0;
+    std::uint64_t written_back_ = 0;  // bytes below this were handed to the kernel's writeback
     bool live_ = false;  // a temporary exists that this object owns
 };
 

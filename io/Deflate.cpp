@@ -36,6 +36,105 @@ unsigned char* thread_buffer(int slot, std::size_t n) {
     return buffers[slot].get(n);
 }
 
+namespace {
+
+// What a thread keeps for its streams: igzip's working memory per level, the output, and the
+// stream's state (82 KB, too large for the stack of a thread pool's worker).
+struct ThreadDeflate {
+    std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
+    ScratchBytes out;  // igzip writes it; only the pages it reaches are faulted in
+    isal_zstream z;
+    bool streaming = false;  // a ZlibStream holds z
+
+    // The working memory for `level`, zeroed: a stream must depend on its input alone, never on
+    // the thread's history (tests/app_dataset.cpp compares datasets made on one thread and on
+    // two). It keeps the previous stream's tables, which igzip does not promise to ignore.
+    std::vector<std::uint8_t>& working_memory(int level) {
+        std::vector<std::uint8_t>& buf = level_buf[level >= kIgzipMinLevel && level <= kIgzipMaxLevel ? level : 0];
+        if (buf.empty()) buf.resize(igzip_level_buffer_size(level));
+        else std::fill(buf.begin(), buf.end(), std::uint8_t{0});
+        return buf;
+    }
+};
+
+ThreadDeflate& thread_deflate() {
+    thread_local ThreadDeflate t;
+    return t;
+}
+
+constexpr std::size_t kMaxOut = std::numeric_limits<std::uint32_t>::max();
+
+}  // namespace
+
+struct ZlibStream::State {
+    ThreadDeflate& t;
+    std::size_t room = 0, fed = 0;
+    unsigned char* out = nullptr;
+    bool done = false, fits = true;
+};
+
+ZlibStream::ZlibStream(int level, std::size_t limit) : state_(nullptr) {
+    ThreadDeflate& t = thread_deflate();
+    if (t.streaming) throw std::logic_error("ZlibStream: a thread's second stream while its first is open");
+    auto s = std::make_unique<State>(State{t});
+    s->room = limit == 0 ? 0 : std::min(limit - 1, kMaxOut);
+    s->fits = limit != 0;
+    s->done = limit == 0;  // nothing fits: finished, with size 0
+    std::vector<std::uint8_t>& buf = t.working_memory(level);
+    s->out = t.out.get(std::max<std::size_t>(s->room, 1));
+    // Zeroed first: isal_deflate_init leaves part of the state as it was (see zlib_deflate).
+    t.z = isal_zstream{};
+    isal_deflate_init(&t.z);
+    t.z.level = static_cast<std::uint32_t>(level);
+    t.z.level_buf = buf.data();
+    t.z.level_buf_size = static_cast<std::uint32_t>(buf.size());
+    t.z.gzip_flag = IGZIP_ZLIB;
+    t.z.flush = NO_FLUSH;
+    t.z.next_out = s->out;
+    t.z.avail_out = static_cast<std::uint32_t>(s->room);
+    t.streaming = true;
+    state_ = s.release();
+}
+
+ZlibStream::~ZlibStream() {
+    state_->t.streaming = false;
+    delete state_;
+}
+
+bool ZlibStream::add(const unsigned char* in, std::size_t n, bool last) {
+    State& s = *state_;
+    if (s.done && s.fits) throw std::logic_error("ZlibStream: input after the last piece");
+    s.fed += n;
+    if (s.fed > kMaxDeflatePiece)
+        throw std::invalid_argument("more than " + std::to_string(kMaxDeflatePiece) + " bytes to deflate in one stream");
+    if (!s.fits) return false;
+    s.done = last;
+    isal_zstream& z = s.t.z;
+    z.next_in = const_cast<std::uint8_t*>(in);  // igzip only reads it
+    z.avail_in = static_cast<std::uint32_t>(n);
+    z.end_of_stream = last ? 1 : 0;
+    // igzip takes all the input unless the output is full; at the end it runs until the stream is
+    // complete. Either way a full output means the stream does not fit.
+    for (;;) {
+        const int r = isal_deflate(&z);
+        if (r != COMP_OK) throw std::runtime_error("ISA-L's deflate failed (code " + std::to_string(r) + ")");
+        const bool finished = !last ? z.avail_in == 0 : z.internal_state.state == ZSTATE_END;
+        if (finished) return true;
+        if (z.avail_out == 0) {
+            s.fits = false;
+            s.done = true;  // finished, with size 0
+            return false;
+        }
+    }
+}
+
+Deflated ZlibStream::result() const {
+    const State& s = *state_;
+    if (!s.done) throw std::logic_error("ZlibStream: the result before the last piece");
+    if (!s.fits) return {};
+    return {s.out, s.t.z.total_out};
+}
+
 Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit) {
     constexpr std::size_t kMax = std::numeric_limits<std::uint32_t>::max();
     // igzip counts in 32 bits, and its stored-block fallback adds up to 64 KiB to the input's size
@@ -43,16 +142,11 @@ Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::si
     if (n > kMaxDeflatePiece)
         throw std::invalid_argument("more than " + std::to_string(kMaxDeflatePiece) + " bytes to deflate in one piece");
     if (limit == 0) return {};
-    thread_local std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
-    thread_local ScratchBytes out;  // igzip writes it; only the pages it reaches are faulted in
-    std::vector<std::uint8_t>& buf = level_buf[level >= kIgzipMinLevel && level <= kIgzipMaxLevel ? level : 0];
-    // The stream must depend on `in` alone, never on the thread's history (tests/app_dataset.cpp
-    // compares datasets made on one thread and on two). The working memory keeps the previous
-    // stream's tables, which igzip does not promise to ignore: zeroed, it is as fresh.
-    if (buf.empty()) buf.resize(igzip_level_buffer_size(level));
-    else std::fill(buf.begin(), buf.end(), std::uint8_t{0});
+    ThreadDeflate& t = thread_deflate();
+    if (t.streaming) throw std::logic_error("zlib_deflate: called while the thread's ZlibStream is open");
+    std::vector<std::uint8_t>& buf = t.working_memory(level);
     const std::size_t room = std::min(limit - 1, kMax);
-    unsigned char* const out_bytes = out.get(room);
+    unsigned char* const out_bytes = t.out.get(room);
     // Zeroed first: isal_deflate_stateless_init leaves part of the state as it was, and stack
     // garbage there made a block's bytes depend on the calls before it (the dataset test).
     isal_zstream z{};

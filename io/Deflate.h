@@ -38,6 +38,29 @@ struct Deflated {
 inline constexpr std::size_t kMaxDeflatePiece = 0xFFFFFFFFu - (16u << 20);
 Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit);
 
+// The same zlib stream as zlib_deflate's contract gives, for an input that arrives in pieces
+// (igzip's stateful deflate; its bytes may differ from zlib_deflate's of the joined input, and
+// depend only on the pieces, the level and the limit): so that a caller need not first copy its
+// pieces into one buffer (the rows of a PNG picture, each after its filter byte). The output is
+// the calling thread's, as zlib_deflate's (the two share it): valid until the thread's next
+// stream. One stream at a time per thread.
+class ZlibStream {
+public:
+    ZlibStream(int level, std::size_t limit);
+    ~ZlibStream();
+    ZlibStream(const ZlibStream&) = delete;
+    ZlibStream& operator=(const ZlibStream&) = delete;
+    // Deflates n more bytes (at most kMaxDeflatePiece in all); `last` ends the stream. False once
+    // the stream does not fit in its limit (it is then finished, with size 0).
+    bool add(const unsigned char* in, std::size_t n, bool last);
+    // The stream once `last` was added (size 0 if it did not fit).
+    Deflated result() const;
+
+private:
+    struct State;
+    State* state_;
+};
+
 // A byte buffer of the calling thread's for `slot` (0..3), at least n bytes long, kept between
 // calls for the same reason: for the pictures and blocks io/Image.cpp encodes. Its bytes are
 // undefined until the caller writes them: a buffer that grows is replaced, not copied, and a new

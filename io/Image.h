@@ -13,6 +13,7 @@
 // (io/AtomicFile.h): a failed write leaves an existing file untouched and no temporary behind.
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -100,6 +101,12 @@ void write_png(const std::string& path, const Image& img);
 // The same for code values as they are (png_code's); the same file as write_png of the Image
 // whose values are these codes / 255.
 void write_png(const std::string& path, const Image8& img);
+// The same file as write_png of an 8-bit picture of `channels` (1 or 3) code values, its rows
+// produced on demand: row(r, out) writes row r's width * channels codes to out (r from 0, the
+// top, to height - 1, once each, in order). For a picture held in another layout, which then
+// need not be copied whole into an Image8 first (a preview drawn in a Cairo surface).
+void write_png_rows(const std::string& path, int width, int height, int channels,
+                    const std::function<void(int, std::uint8_t*)>& row);
 
 // A 16-bit greyscale PNG (e.g. an instance mask: 0 = background, k = instance k), width x height
 // values in Image order (row 0 = the top row of the picture). Each value is stored exactly as its

@@ -804,6 +804,25 @@ TEST(PseudoColourPng, ReadableAndTheSameCodes) {
     fs::remove_all(dir);
 }
 
+// Over [0, 255] the cells' colours land on every entry of the map (whole values: f = 0, and
+// f = 1 at the top), halfway between entries, and just off them: the PNG path's inlined viridis
+// must give the codes of viridis() itself, which returns the entries as they are there.
+TEST(PseudoColourPng, EveryEntryOfTheMapAndBetweenAsViridisGivesThem) {
+    const fs::path dir = fs::temp_directory_path() / ("ltm_plot_entries_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string file = (dir / "entries.png").string();
+    std::vector<float> v;
+    for (int k = 0; k < 256; ++k)
+        for (const float d : {0.0f, 0.5f, 1e-3f, -1e-3f}) v.push_back(static_cast<float>(k) + d);
+    const int w = 64, h = static_cast<int>(v.size()) / w;
+    ltm::write_pseudo_colour_png(file, v, w, h, "", 0.0, 255.0, 1, {});
+    const Image back = ltm::read_image(file);
+    const Image expected = ltm::pseudo_colour(v, w, h, "", 0.0, 255.0, 1, {});
+    ASSERT_EQ(back.data.size(), expected.data.size());
+    for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
+    fs::remove_all(dir);
+}
+
 namespace {
 
 // A line plot is kLinePlotWidth x kLinePlotHeight, draws its series in their colours (the point

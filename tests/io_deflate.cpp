@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -69,4 +71,70 @@ TEST(Deflate, Crc32IsZlibsAndContinues) {
     EXPECT_EQ(z, 0x414FA339u);  // the published CRC-32 of this sentence
     EXPECT_EQ(ltm::io::crc32(0, s.data(), s.size()), z);
     EXPECT_EQ(ltm::io::crc32(ltm::io::crc32(0, s.data(), 10), s.data() + 10, s.size() - 10), z);
+}
+
+namespace {
+
+// The stream of `in` fed to a ZlibStream in pieces of `piece` bytes (the last one shorter).
+std::string streamed(const std::vector<unsigned char>& in, std::size_t piece, int level, std::size_t limit) {
+    ltm::io::ZlibStream s(level, limit);
+    for (std::size_t at = 0; at < in.size(); at += piece) {
+        const std::size_t n = std::min(piece, in.size() - at);
+        if (!s.add(in.data() + at, n, at + n == in.size())) break;
+    }
+    const ltm::io::Deflated d = s.result();
+    return {reinterpret_cast<const char*>(d.data), d.size};
+}
+
+}  // namespace
+
+// A stream fed in pieces (as write_png feeds a picture's rows, each after its filter byte)
+// inflates with zlib to the pieces joined, at every level and piece size, and its bytes are the
+// same from a fresh thread and after other streams and whole deflates.
+TEST(Deflate, AStreamInPiecesInflatesToThePiecesJoinedAndDependsOnThemAlone) {
+    std::mt19937 rng(7);
+    std::vector<unsigned char> in(300001), other(120000);
+    for (std::size_t i = 0; i < in.size(); ++i)
+        in[i] = static_cast<unsigned char>((i / 3) % 29 + (rng() % 7 == 0 ? rng() % 200 : 0));
+    for (auto& b : other) b = static_cast<unsigned char>(rng() % 13);
+    for (int level = 1; level <= 3; ++level)
+        for (const std::size_t piece : {std::size_t(1), std::size_t(3001), std::size_t(65536), in.size()}) {
+            SCOPED_TRACE("level " + std::to_string(level) + ", pieces of " + std::to_string(piece));
+            if (piece == 1 && level != 2) continue;  // byte by byte is slow; once is enough
+            const std::size_t limit = in.size() + in.size() / 1024 + 1024;
+            std::string fresh;
+            std::thread([&] { fresh = streamed(in, piece, level, limit); }).join();
+            ASSERT_FALSE(fresh.empty());
+            for (int before = 1; before <= 3; ++before) {
+                ltm::io::zlib_deflate(other.data(), other.size(), before, other.size());
+                streamed(other, 5000, before, other.size());
+            }
+            EXPECT_TRUE(streamed(in, piece, level, limit) == fresh);
+            std::vector<unsigned char> back(in.size());
+            uLongf n = static_cast<uLongf>(back.size());
+            ASSERT_EQ(uncompress(back.data(), &n, reinterpret_cast<const Bytef*>(fresh.data()), static_cast<uLong>(fresh.size())),
+                      Z_OK);
+            EXPECT_TRUE(n == in.size() && back == in);
+        }
+}
+
+// A stream that outgrows its limit is finished with size 0, whatever piece it outgrew it in; a
+// thread's second stream while its first is open, and input after the last piece, are errors.
+TEST(Deflate, AStreamOverItsLimitHasSizeZeroAndMisuseIsRefused) {
+    std::mt19937 rng(9);
+    std::vector<unsigned char> noise(200000);
+    for (auto& b : noise) b = static_cast<unsigned char>(rng());
+    for (const std::size_t limit : {std::size_t(0), std::size_t(1), std::size_t(100), std::size_t(150000)})
+        EXPECT_TRUE(streamed(noise, 4096, 2, limit).empty()) << limit;
+    EXPECT_FALSE(streamed(noise, 4096, 2, noise.size() + noise.size() / 1024 + 1024).empty());
+    {
+        ltm::io::ZlibStream s(2, 1000);
+        EXPECT_THROW(ltm::io::ZlibStream(2, 1000), std::logic_error);
+        EXPECT_THROW(ltm::io::zlib_deflate(noise.data(), 10, 2, 1000), std::logic_error);
+        const unsigned char abc[3] = {'a', 'b', 'c'};
+        ASSERT_TRUE(s.add(abc, 3, true));
+        EXPECT_THROW(s.add(abc, 3, true), std::logic_error);
+        EXPECT_GT(s.result().size, 0u);
+    }
+    ltm::io::ZlibStream after(2, 1000);  // the first one closed: a new one may open
 }
