@@ -144,8 +144,9 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
                 // The interleaved x, y means, read in place (copies of them page-faulted 16 MB
                 // fresh at industrial scale, about 40 ms).
                 const std::size_t pixels = run.reference.size() / 2;
+                const float* const xy = pixels > 0 ? run.reference.data() : nullptr;  // write_exr refuses 0 pixels
                 write_exr((d / "reference.exr").string(), scene.camera.resolution[0], scene.camera.resolution[1],
-                          {{"MeanX", run.reference.data(), pixels, 2}, {"MeanY", run.reference.data() + 1, pixels, 2}});
+                          {{"MeanX", xy, pixels, 2}, {"MeanY", xy ? xy + 1 : nullptr, pixels, 2}});
             },
             [&] { write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}, previews); });
         t_write.done(dir);

@@ -168,7 +168,7 @@ cairo_font_face_t* font_face() {
 // every page of a fresh picture costs a page fault, about 10 us on a virtual machine, which was a
 // quarter of the default scene's write stage (perf). A Canvas given one draws into `surface`.
 struct PictureMemory {
-    std::vector<unsigned char> surface;
+    std::vector<std::uint32_t> surface;  // Cairo's RGB24 pixel words
 };
 
 // A picture as a Cairo surface holds it: each pixel a 32-bit word 0x00RRGGBB (CAIRO_FORMAT_RGB24,
@@ -201,9 +201,10 @@ void rgb_codes(const std::uint32_t* row, int n, std::uint8_t* out) {
 // v resized to n for bytes the caller overwrites: a v too small is replaced by a fresh one with an
 // eighth more room (for the next, slightly larger picture) instead of grown, which would copy the
 // old bytes into new pages and fault each page twice.
-void reuse(std::vector<std::uint8_t>& v, std::size_t n) {
+template <class T>
+void reuse(std::vector<T>& v, std::size_t n) {
     if (v.capacity() < n) {
-        std::vector<std::uint8_t>().swap(v);
+        std::vector<T>().swap(v);
         v.reserve(n + n / 8);
     }
     v.resize(n);
@@ -218,9 +219,10 @@ public:
             if (stride < 0)
                 throw std::runtime_error("Cairo: cannot make a " + std::to_string(width) + " x " + std::to_string(height) +
                                          " canvas: the width is too large");
-            reuse(memory_->surface, static_cast<std::size_t>(stride) * static_cast<std::size_t>(height > 0 ? height : 0));
-            surface_ = cairo_image_surface_create_for_data(memory_->surface.data(), CAIRO_FORMAT_RGB24, width, height,
-                                                           stride);
+            // RGB24's stride is a multiple of 4 bytes: whole words.
+            reuse(memory_->surface, static_cast<std::size_t>(stride / 4) * static_cast<std::size_t>(height > 0 ? height : 0));
+            surface_ = cairo_image_surface_create_for_data(reinterpret_cast<unsigned char*>(memory_->surface.data()),
+                                                           CAIRO_FORMAT_RGB24, width, height, stride);
         } else {
             surface_ = cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height);
         }
@@ -323,7 +325,7 @@ public:
         SurfacePicture p;
         p.width = cairo_image_surface_get_width(surface_);
         p.height = cairo_image_surface_get_height(surface_);
-        p.pixels = reinterpret_cast<std::uint32_t*>(cairo_image_surface_get_data(surface_));
+        p.pixels = memory_->surface.data();  // the words Cairo drew into
         p.stride = static_cast<std::size_t>(cairo_image_surface_get_stride(surface_)) / 4;
         return p;
     }
@@ -375,6 +377,7 @@ void fill_rect(SurfacePicture& img, int x, int y, int w, int h, const Rgb& c) {
     const std::uint32_t word = pixel_word(code);
     const int r0 = std::max(y, 0), r1 = std::min(y + h, img.height);
     const int c0 = std::max(x, 0), c1 = std::min(x + w, img.width);
+    if (c0 >= c1) return;
     for (int r = r0; r < r1; ++r) std::fill(img.pixels + static_cast<std::size_t>(r) * img.stride + c0,
                                             img.pixels + static_cast<std::size_t>(r) * img.stride + c1, word);
 }

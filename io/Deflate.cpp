@@ -23,7 +23,8 @@ std::size_t igzip_level_buffer_size(int level) {
 unsigned char* ScratchBytes::get(std::size_t n) {
     if (n > capacity_) {
         bytes_.reset();  // the old bytes go first: they are not needed, and not copied
-        const std::size_t grown = n + n / 8;
+        capacity_ = 0;   // so that a failed allocation below leaves an empty buffer, not a dangling size
+        const std::size_t grown = n <= std::numeric_limits<std::size_t>::max() - n / 8 ? n + n / 8 : n;
         bytes_.reset(new unsigned char[grown]);  // not value-initialised: no page is touched here
         capacity_ = grown;
     }
@@ -117,7 +118,11 @@ bool ZlibStream::add(const unsigned char* in, std::size_t n, bool last) {
     // complete. Either way a full output means the stream does not fit.
     for (;;) {
         const int r = isal_deflate(&z);
-        if (r != COMP_OK) throw std::runtime_error("ISA-L's deflate failed (code " + std::to_string(r) + ")");
+        if (r != COMP_OK) {
+            s.fits = false;  // a caller that goes on gets size 0, never a truncated stream
+            s.done = true;
+            throw std::runtime_error("ISA-L's deflate failed (code " + std::to_string(r) + ")");
+        }
         const bool finished = !last ? z.avail_in == 0 : z.internal_state.state == ZSTATE_END;
         if (finished) return true;
         if (z.avail_out == 0) {

@@ -97,26 +97,27 @@ void png_read_fn(png_structp png, png_bytep out, png_size_t n) {
 }
 
 
-// Writes `samples` (rows top to bottom, each width * channels samples of bit_depth 8 or 16,
-// 16-bit ones big-endian, `size` bytes in all) to `path` as a PNG file, atomically (the PNG specification, ISO/IEC 15948): the signature;
-// IHDR (width, height, bit depth, colour type; compression, filter and interlace methods 0);
-// IDAT chunks holding the zlib stream (RFC 1950) of the rows, each row after its filter-type byte
-// 0 (None: previews are flat colour and noisy data cells, which the adaptive filters do not
-// predict; unfiltered rows deflated ~10 % smaller and ~35 % faster with libpng); IEND. Each chunk
-// is its length, type, data and the CRC-32 of type and data. The rows are deflated whole by
-// igzip (io/Deflate.h) at kPngLevel.
-// row(r, out) writes row r's rowbytes bytes to out.
+// Writes the rows row(r, out) gives (top to bottom, r = 0 .. height - 1, each rowbytes = width *
+// channels samples of bit_depth 8 or 16, 16-bit ones big-endian) to `path` as a PNG file,
+// atomically (the PNG specification, ISO/IEC 15948): the signature; IHDR (width, height, bit
+// depth, colour type; compression, filter and interlace methods 0); IDAT chunks holding the zlib
+// stream (RFC 1950) of the rows, each row after its filter-type byte 0 (None: previews are flat
+// colour and noisy data cells, which the adaptive filters do not predict; unfiltered rows deflated
+// ~10 % smaller and ~35 % faster with libpng); IEND. Each chunk is its length, type, data and the
+// CRC-32 of type and data. The rows are deflated as one stream by igzip (io/Deflate.h's
+// ZlibStream) at kPngLevel, a row at a time.
 void write_png_file(const std::string& path, int width, int height, int bit_depth, int color_type, std::size_t rowbytes,
                     const std::function<void(int, std::uint8_t*)>& row) {
-    // Deflate never needs more than its stored blocks (5 bytes per 64 KiB) and zlib's 6 bytes of
-    // header and Adler-32; igzip falls back to stored blocks where compressing does not fit.
     // The rows are streamed, each after its filter byte, from one line buffer: a copy of the whole
     // picture with the filter bytes faulted in 3.5 MB per thread for the industrial scene's
-    // previews.
+    // previews. The limit: deflate's stored blocks need 5 bytes per 64 KiB and zlib 6 bytes of
+    // header and Adler-32, but igzip's streaming deflate falls back to stored blocks only within
+    // one piece of input, and on random rows it was measured 0.065 % over the input: the room is
+    // n / 64 + 4 KiB over it, and costs nothing until written (io::ScratchBytes).
     const std::size_t n = (rowbytes + 1) * static_cast<std::size_t>(height);
     io::Deflated z;
     try {
-        io::ZlibStream stream(kPngLevel, n + n / 1024 + 1024);
+        io::ZlibStream stream(kPngLevel, n + n / 64 + 4096);
         unsigned char* const line = io::thread_buffer(0, rowbytes + 1);
         line[0] = 0;  // filter type None
         for (int r = 0; r < height; ++r) {

@@ -4,6 +4,8 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <limits>
+#include <new>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -137,4 +139,24 @@ TEST(Deflate, AStreamOverItsLimitHasSizeZeroAndMisuseIsRefused) {
         EXPECT_GT(s.result().size, 0u);
     }
     ltm::io::ZlibStream after(2, 1000);  // the first one closed: a new one may open
+}
+
+// A scratch buffer whose growth fails (std::bad_alloc) is left empty, not with the size it had:
+// the next, smaller request gets fresh room (before, it got a null pointer and the next PNG or
+// EXR write on that thread crashed). AddressSanitizer reports an impossible allocation instead
+// of throwing, so the test runs in the plain build only.
+TEST(Deflate, AScratchBufferWhoseGrowthFailsIsEmptyNotDangling) {
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "AddressSanitizer aborts on an impossible allocation instead of throwing";
+#else
+    ltm::io::ScratchBytes b;
+    unsigned char* p = b.get(100);
+    ASSERT_NE(p, nullptr);
+    p[99] = 1;
+    EXPECT_THROW(b.get(std::numeric_limits<std::size_t>::max() / 2), std::bad_alloc);
+    p = b.get(50);
+    ASSERT_NE(p, nullptr);
+    p[49] = 2;  // writable
+    EXPECT_EQ(p[49], 2);
+#endif
 }
