@@ -61,8 +61,9 @@ FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const R
 // DIR/features.exr (one FLOAT channel per image), DIR/features.npz (the same channels as float32
 // arrays of shape (rows, columns), for numpy without an EXR reader) and DIR/features/<name>.png
 // (pseudo colour titled with the channel's unit; axes in mm over `camera`, the camera's field of
-// view, when it is known); the PNGs only with `previews`.
+// view, when it is known); the PNGs only with `previews`. With `group`, every file is committed
+// into it (io/AtomicFile.h), in place at its commit; without, each is committed as it is written.
 void write_feature_images(const std::string& dir, const FeatureImages& f, const ImageExtent& camera = {},
-                          bool previews = true);
+                          bool previews = true, io::CommitGroup* group = nullptr);
 
 }  // namespace ltm::app

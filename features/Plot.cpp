@@ -907,13 +907,13 @@ Image pseudo_colour(const std::vector<float>& values, int width, int height, con
 
 void write_pseudo_colour_png(const std::string& path, const std::vector<float>& values, int width, int height,
                              const std::string& title, double lo, double hi, int pixel_scale,
-                             const ImageExtent& extent) {
+                             const ImageExtent& extent, io::CommitGroup* group) {
     thread_local PictureMemory memory;  // kept by the thread for its next preview
     const SurfacePicture picture =
         draw_pseudo_colour<SurfacePicture>(values, width, height, title, lo, hi, pixel_scale, extent, &memory);
     write_png_rows(path, picture.width, picture.height, 3, [&](int r, std::uint8_t* out) {
         rgb_codes(picture.pixels + static_cast<std::size_t>(r) * picture.stride, picture.width, out);
-    });
+    }, group);
 }
 
 // ---- montage ----

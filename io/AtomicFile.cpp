@@ -94,7 +94,7 @@ void AtomicFile::write(const void* bytes, std::size_t n) {
 #endif
 }
 
-void AtomicFile::commit() {
+void AtomicFile::commit(CommitGroup* group) {
     if (!live_) fail("internal error: commit after commit or failure");
     if (mode_ == Mode::ByName) {
         fd_ = ::open(tmp_.c_str(), O_RDONLY | O_CLOEXEC);
@@ -102,6 +102,10 @@ void AtomicFile::commit() {
             const int e = errno;
             fail("reopening the temporary file '" + tmp_ + "' failed: " + errno_text(e));
         }
+    }
+    if (group) {
+        hand_to(*group);
+        return;
     }
     if (::fsync(fd_) != 0) {
         const int e = errno;
@@ -128,6 +132,23 @@ void AtomicFile::commit() {
     }
 }
 
+void AtomicFile::hand_to(CommitGroup& group) {
+#ifdef __linux__
+    // The rest of the file to the kernel's writeback (nbytes 0: to the end); only a hint, as in
+    // write(): the group's fsync is what makes it durable.
+    (void)::sync_file_range(fd_, static_cast<off_t>(written_back_), 0, SYNC_FILE_RANGE_WRITE);
+#endif
+    try {
+        group.add({fd_, tmp_, path_, kind_});
+    } catch (const std::exception& e) {
+        fail(std::string("handing the file to its commit group failed: ") + e.what());
+    }
+    // The group owns the temporary now.
+    fd_ = -1;
+    live_ = false;
+    tmp_.clear();
+}
+
 bool AtomicFile::is_temporary_name(const std::string& filename) { return detail::is_temporary_name(filename, false); }
 
 void write_file(const std::string& path, std::string_view bytes, const std::string& kind) {
@@ -146,6 +167,67 @@ void fsync_folder(const std::string& path) {
     const int e = errno;
     ::close(fd);
     if (r != 0 && e != EINVAL) throw std::runtime_error("cannot sync folder '" + path + "': " + errno_text(e));
+}
+
+CommitGroup::~CommitGroup() {
+    for (File& f : files_) discard(f);
+}
+
+void CommitGroup::add(File&& file) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    files_.push_back(std::move(file));
+}
+
+std::size_t CommitGroup::size() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return files_.size();
+}
+
+void CommitGroup::discard(File& f) noexcept {
+    if (f.fd >= 0) ::close(f.fd);
+    f.fd = -1;
+    if (!f.tmp.empty()) ::unlink(f.tmp.c_str());
+    f.tmp.clear();
+}
+
+void CommitGroup::commit() {
+    std::vector<File> files;
+    {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        files.swap(files_);
+    }
+    // From here `files` owns the temporaries: whatever is not renamed is discarded on the way out.
+    struct Owner {
+        std::vector<File>& files;
+        ~Owner() {
+            for (File& f : files) discard(f);
+        }
+    } owner{files};
+    std::vector<std::string> folders;  // distinct, in the order of the files
+    for (File& f : files) {
+        // The same messages as commit()'s (errno is read before any string is built).
+        const auto failed = [&](int e, const char* step, const char* after) {
+            throw std::runtime_error("cannot write " + f.kind + " '" + f.path + "': " + step + " the temporary file '" +
+                                     f.tmp + "'" + after + " failed: " + errno_text(e));
+        };
+        if (::fsync(f.fd) != 0) failed(errno, "syncing", "");
+        const int fd = f.fd;
+        f.fd = -1;
+        if (::close(fd) != 0) failed(errno, "closing", "");
+        if (std::rename(f.tmp.c_str(), f.path.c_str()) != 0) failed(errno, "renaming", " onto it");
+        f.tmp.clear();  // in place: nothing left to discard
+        const std::string folder = detail::folder_of(f.path).string();
+        if (std::find(folders.begin(), folders.end(), folder) == folders.end()) folders.push_back(folder);
+    }
+    for (const std::string& folder : folders) {
+        try {
+            fsync_folder(folder);
+        } catch (const std::exception& e) {
+            throw std::runtime_error("cannot write the files committed together in '" + folder +
+                                     "': they are complete and in place, but their names may not survive a crash: " +
+                                     e.what());
+        }
+    }
 }
 
 }  // namespace ltm::io

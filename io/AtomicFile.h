@@ -24,10 +24,14 @@
 // approximately).
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace ltm::io {
+
+class CommitGroup;
 
 // A file written atomically.
 //
@@ -79,7 +83,12 @@ public:
     // further write() or commit() is an error. If it throws, the temporary is gone and path() is as
     // it was before, except when only the final folder sync failed (the message says so): then
     // the new file is in place but its name may not survive a power loss.
-    void commit();
+    //
+    // With a `group` (see CommitGroup), the file is completed by the group instead: its writeback
+    // is started now (sync_file_range) and the object hands the temporary to the group, which
+    // fsyncs it, renames it onto path() and syncs its folder in group->commit(). After it, the
+    // object holds nothing; if it throws, the temporary is gone and path() is as it was.
+    void commit(CommitGroup* group = nullptr);
 
     // Removes the temporary and throws "cannot write <kind> '<path>': <reason>"; for callers
     // whose own step fails (a library reporting an error) so that their message has the same form.
@@ -96,6 +105,7 @@ public:
     static bool is_temporary_name(const std::string& filename);
 
 private:
+    void hand_to(CommitGroup& group);
     void discard() noexcept;
     std::string path_, kind_, tmp_;
     Mode mode_;
@@ -103,6 +113,50 @@ private:
     std::uint64_t pos_ = 0;
     std::uint64_t written_back_ = 0;  // bytes below this were handed to the kernel's writeback
     bool live_ = false;  // a temporary exists that this object owns
+};
+
+// Files made durable together: the outputs of a render, written at once by several threads.
+//
+// Committed alone, each file costs two fsyncs, its own and its folder's, and on ext4 each is a
+// journal commit and a flush of the disk's cache: the default scene's 21 outputs spent 39 ms of
+// thread time in 44 fsyncs (strace), half of the write stage. Committed into a group, a file's
+// writeback starts at once (sync_file_range) while the other files are computed, and the group's
+// commit() then fsyncs the files one after another (the first commits the journal for the data
+// of all of them, so the others find little left to do), renames each onto its path and syncs
+// each distinct folder once.
+//
+// The guarantees are AtomicFile's, for every file of the group, with group.commit() in the place
+// of the file's commit(): before it, no file of the group is at its path (every path holds what
+// it held); once it returns, every file and its name are on stable storage; a crash in between
+// leaves each path with its old or its new content. If commit() throws (the message names the
+// file, as AtomicFile's do), the files before the failing one are in place, complete, and the
+// failing one and those after it are discarded: their temporaries removed, their paths as they
+// were. Destroying a group that was not committed (e.g. while an exception propagates) discards
+// every file in it.
+//
+// AtomicFile::commit(group) may be called from several threads at once; the group's commit()
+// once, after every file is in.
+class CommitGroup {
+public:
+    CommitGroup() = default;
+    ~CommitGroup();
+    CommitGroup(const CommitGroup&) = delete;
+    CommitGroup& operator=(const CommitGroup&) = delete;
+
+    void commit();
+    // Files handed in and not yet committed or discarded.
+    std::size_t size() const;
+
+private:
+    friend class AtomicFile;
+    struct File {
+        int fd = -1;  // the temporary, open
+        std::string tmp, path, kind;
+    };
+    void add(File&& file);
+    static void discard(File& file) noexcept;
+    mutable std::mutex mutex_;
+    std::vector<File> files_;
 };
 
 // Writes `bytes` to `path` atomically, with `kind` in error messages (an AtomicFile written and

@@ -107,7 +107,7 @@ void png_read_fn(png_structp png, png_bytep out, png_size_t n) {
 // CRC-32 of type and data. The rows are deflated as one stream by igzip (io/Deflate.h's
 // ZlibStream) at kPngLevel, a row at a time.
 void write_png_file(const std::string& path, int width, int height, int bit_depth, int color_type, std::size_t rowbytes,
-                    const std::function<void(int, std::uint8_t*)>& row) {
+                    const std::function<void(int, std::uint8_t*)>& row, io::CommitGroup* group = nullptr) {
     // The rows are streamed, each after its filter byte, from one line buffer: a copy of the whole
     // picture with the filter bytes faulted in 3.5 MB per thread for the industrial scene's
     // previews. The limit: deflate's stored blocks need 5 bytes per 64 KiB and zlib 6 bytes of
@@ -152,7 +152,7 @@ void write_png_file(const std::string& path, int width, int height, int bit_dept
     for (std::size_t at = 0; at < z.size; at += kPngMaxIdat)
         chunk("IDAT", z.data + at, std::min(kPngMaxIdat, z.size - at));
     chunk("IEND", nullptr, 0);
-    file.commit();
+    file.commit(group);
 }
 
 // The same from `size` bytes of rows in memory.
@@ -408,14 +408,14 @@ void write_png(const std::string& path, const Image8& img) {
 }
 
 void write_png_rows(const std::string& path, int width, int height, int channels,
-                    const std::function<void(int, std::uint8_t*)>& row) {
+                    const std::function<void(int, std::uint8_t*)>& row, io::CommitGroup* group) {
     auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write PNG image '" + path + "': " + why); };
     if (width <= 0 || height <= 0)
         fail("the image is empty (" + std::to_string(width) + " x " + std::to_string(height) + ")");
     if (channels != 1 && channels != 3)
         fail("the image has " + std::to_string(channels) + " channels; PNG output needs 1 (gray) or 3 (RGB)");
     write_png_file(path, width, height, 8, channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
-                   static_cast<std::size_t>(width) * static_cast<std::size_t>(channels), row);
+                   static_cast<std::size_t>(width) * static_cast<std::size_t>(channels), row, group);
 }
 
 void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& values) {
@@ -435,14 +435,15 @@ void write_png16(const std::string& path, int width, int height, const std::vect
 }
 
 void write_exr(const std::string& path, int width, int height,
-               const std::vector<std::pair<std::string, std::vector<float>>>& channels) {
+               const std::vector<std::pair<std::string, std::vector<float>>>& channels, io::CommitGroup* group) {
     std::vector<ExrChannelView> views;
     views.reserve(channels.size());
     for (const auto& [name, values] : channels) views.push_back({name, values.data(), values.size(), 1});
-    write_exr(path, width, height, views);
+    write_exr(path, width, height, views, group);
 }
 
-void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannelView>& channels) {
+void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannelView>& channels,
+               io::CommitGroup* group) {
     auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write EXR image '" + path + "': " + why); };
     if (width <= 0 || height <= 0)
         fail("the image is empty (" + std::to_string(width) + " x " + std::to_string(height) + ")");
@@ -567,11 +568,11 @@ void write_exr(const std::string& path, int width, int height, const std::vector
     }
     file.seek(table_at);
     file.write(table);
-    file.commit();
+    file.commit(group);
 }
 
 void write_npz_channels(const std::string& path, int width, int height,
-                        const std::vector<std::pair<std::string, std::vector<float>>>& channels) {
+                        const std::vector<std::pair<std::string, std::vector<float>>>& channels, io::CommitGroup* group) {
     const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     std::vector<io::NpyArray> arrays;
     for (const auto& [name, values] : channels) {
@@ -580,7 +581,9 @@ void write_npz_channels(const std::string& path, int width, int height,
                                         " values, expected " + std::to_string(n));
         arrays.push_back(io::npy_array(name, values, {static_cast<std::uint64_t>(height), static_cast<std::uint64_t>(width)}));
     }
-    io::write_npz(path, arrays, {}, "npz image");
+    io::NpzWriteOptions options;
+    options.group = group;
+    io::write_npz(path, arrays, options, "npz image");
 }
 
 }  // namespace ltm

@@ -18,6 +18,10 @@
 #include <utility>
 #include <vector>
 
+namespace ltm::io {
+class CommitGroup;  // io/AtomicFile.h
+}
+
 namespace ltm {
 
 struct Image {
@@ -105,8 +109,10 @@ void write_png(const std::string& path, const Image8& img);
 // produced on demand: row(r, out) writes row r's width * channels codes to out (r from 0, the
 // top, to height - 1, once each, in order). For a picture held in another layout, which then
 // need not be copied whole into an Image8 first (a preview drawn in a Cairo surface).
+// With `group`, the file is committed into it (io/AtomicFile.h's CommitGroup: in place at
+// group->commit()), as are the EXR and npz files below.
 void write_png_rows(const std::string& path, int width, int height, int channels,
-                    const std::function<void(int, std::uint8_t*)>& row);
+                    const std::function<void(int, std::uint8_t*)>& row, io::CommitGroup* group = nullptr);
 
 // A 16-bit greyscale PNG (e.g. an instance mask: 0 = background, k = instance k), width x height
 // values in Image order (row 0 = the top row of the picture). Each value is stored exactly as its
@@ -122,7 +128,8 @@ void write_png16(const std::string& path, int width, int height, const std::vect
 // instead of OpenEXR's zlib: four times as fast), read back by OpenEXR in the
 // tests. Atomic.
 void write_exr(const std::string& path, int width, int height,
-               const std::vector<std::pair<std::string, std::vector<float>>>& channels);
+               const std::vector<std::pair<std::string, std::vector<float>>>& channels,
+               io::CommitGroup* group = nullptr);
 // The same from channels the caller holds elsewhere, without copying them: channel k's value at
 // pixel i is values[i * stride] (stride 2 writes the two halves of an interleaved x, y array);
 // count is how many pixels `values` holds, checked against width * height.
@@ -132,14 +139,16 @@ struct ExrChannelView {
     std::size_t count = 0;
     std::size_t stride = 1;
 };
-void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannelView>& channels);
+void write_exr(const std::string& path, int width, int height, const std::vector<ExrChannelView>& channels,
+               io::CommitGroup* group = nullptr);
 
 // The same channels as a numpy .npz archive (io/Npz.h): one float32 array of shape (height,
 // width) per channel, named as the channel, in C order (row 0 on top), so that numpy reads an
 // image without an EXR library: numpy.load(path)["BrightField"]. Deflate at
 // io/Npz.h's default level. Atomic.
 void write_npz_channels(const std::string& path, int width, int height,
-                        const std::vector<std::pair<std::string, std::vector<float>>>& channels);
+                        const std::vector<std::pair<std::string, std::vector<float>>>& channels,
+                        io::CommitGroup* group = nullptr);
 
 // Every channel of an OpenEXR file (see read_image for what is accepted), converted to float, in
 // the file's channel order, which OpenEXR always stores sorted by name (so the order written by

@@ -172,13 +172,15 @@ void LtmFileStream::append(const CsrMatrix& block) {
     for (std::int64_t r = 1; r <= block.rows; ++r) indptr_.push_back(base + block.indptr[static_cast<std::size_t>(r)]);
 }
 
-void LtmFileStream::commit() {
+void LtmFileStream::commit(io::CommitGroup* group) {
     if (indices_fd_ < 0) fail("the stream is already committed");
     if (rows_written() != rows_)
         fail("only " + std::to_string(rows_written()) + " of " + std::to_string(rows_) + " rows were given");
     const std::size_t n = nnz();
+    NpzWriteOptions options = options_;
+    if (group) options.group = group;
     write_csr_arrays(path_, rows_, cols_, n, indptr_, spilled_array("indices", "<i4", indices_fd_, n),
-                     spilled_array("data", "<f4", data_fd_, n), options_);
+                     spilled_array("data", "<f4", data_fd_, n), options);
     ::close(indices_fd_);
     ::close(data_fd_);
     indices_fd_ = data_fd_ = -1;

@@ -120,8 +120,9 @@ public:
     void append(const CsrMatrix& block);
     std::int64_t rows_written() const { return static_cast<std::int64_t>(indptr_.size()) - 1; }
     std::size_t nnz() const { return static_cast<std::size_t>(indptr_.back()); }
-    // Writes the archive (all `rows` rows must have been appended) and closes the spill files.
-    void commit();
+    // Writes the archive (all `rows` rows must have been appended) and closes the spill files;
+    // with a `group`, the archive is committed into it (io/AtomicFile.h), in place at its commit.
+    void commit(io::CommitGroup* group = nullptr);
 
 private:
     [[noreturn]] void fail(const std::string& why) const;

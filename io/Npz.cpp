@@ -397,7 +397,7 @@ void write_archive(const std::string& path, const std::vector<NpyArray>& arrays,
     if (arrays.empty()) {
         // libzip removes an archive without entries instead of writing one: the end record alone.
         file.write(std::string("PK\x05\x06", 4) + std::string(18, '\0'));
-        file.commit();
+        file.commit(options.group);
         return;
     }
 
@@ -454,7 +454,7 @@ void write_archive(const std::string& path, const std::vector<NpyArray>& arrays,
     open.release();  // zip_close freed it
     zip_error_fini(&error);
     if (failure.any() || !sink.complete) file.fail("internal error: libzip closed an incomplete archive");
-    file.commit();
+    file.commit(options.group);
 }
 
 }  // namespace

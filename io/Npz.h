@@ -66,8 +66,11 @@ constexpr bool negative(T v) {
 }
 }  // namespace detail
 
+class CommitGroup;  // io/AtomicFile.h
+
 struct NpzWriteOptions {
     int compression_level = 2;  // igzip level 1..3 for deflate; 0 stores the entries (ZIP method 0)
+    CommitGroup* group = nullptr;  // committed into it (io/AtomicFile.h) instead of alone
 };
 
 // Fills `out` with the array's bytes [offset, offset + n) as the file holds them and returns how

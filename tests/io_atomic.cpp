@@ -18,6 +18,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "io/AtomicFile.h"
@@ -27,6 +28,7 @@
 namespace fs = std::filesystem;
 using ltm::io::AtomicFile;
 using ltm::io::AtomicFolder;
+using ltm::io::CommitGroup;
 using ltm::test::message_of;
 using ltm::test::slurp;
 using ltm::test::spit;
@@ -244,6 +246,104 @@ TEST_F(AtomicFileTest, FsyncFolder) {
               0u);
 }
 
+// ---- CommitGroup ---------------------------------------------------------------------------
+
+// The names in d that are AtomicFile temporaries.
+std::size_t temporaries_in(const fs::path& d) {
+    const auto names = listing_of(d);
+    return static_cast<std::size_t>(std::count_if(names.begin(), names.end(), AtomicFile::is_temporary_name));
+}
+
+// Files committed into a group from two threads at once, in two folders, one of them replacing a
+// file: nothing is at its path until the group's commit (the old content stays readable, the
+// temporaries wait beside the targets); after it every file holds exactly its bytes and no
+// temporary is left.
+TEST_F(AtomicFileTest, AGroupPutsItsFilesInPlaceAtItsCommitOnly) {
+    fs::create_directories(dir / "sub");
+    write("old.bin", "old content");
+    const std::vector<std::string> targets = {path("old.bin"), path("new.bin"), (dir / "sub" / "a.png").string(),
+                                              (dir / "sub" / "b.png").string()};
+    std::vector<std::string> bytes;
+    for (std::size_t k = 0; k < targets.size(); ++k)
+        bytes.push_back(pattern(k == 1 ? AtomicFile::kWritebackBytes + 12345 : 1000 + 17 * k, 7 + static_cast<std::uint32_t>(k)));
+    CommitGroup group;
+    std::vector<std::thread> writers;
+    for (std::size_t half = 0; half < 2; ++half)
+        writers.emplace_back([&, half] {
+            for (std::size_t k = half; k < targets.size(); k += 2) {
+                AtomicFile f(targets[k], "test file");
+                f.write(bytes[k]);
+                f.commit(&group);
+                EXPECT_TRUE(f.temporary_path().empty());
+            }
+        });
+    for (auto& w : writers) w.join();
+    EXPECT_EQ(group.size(), targets.size());
+    EXPECT_EQ(slurp(path("old.bin")), "old content");
+    EXPECT_FALSE(fs::exists(path("new.bin")));
+    EXPECT_EQ(listing_of(dir / "sub").size(), 2u);
+    EXPECT_EQ(temporaries_in(dir), 2u);
+    EXPECT_EQ(temporaries_in(dir / "sub"), 2u);
+
+    group.commit();
+    EXPECT_EQ(group.size(), 0u);
+    for (std::size_t k = 0; k < targets.size(); ++k) EXPECT_EQ(slurp(targets[k]), bytes[k]) << targets[k];
+    EXPECT_EQ(listing(), (std::vector<std::string>{"new.bin", "old.bin", "sub"}));
+    EXPECT_EQ(listing_of(dir / "sub"), (std::vector<std::string>{"a.png", "b.png"}));
+    EXPECT_NO_THROW(group.commit());  // an empty group has nothing to do
+}
+
+// A group destroyed without its commit (an exception on the way) discards every file: the paths
+// hold what they held and no temporary is left. Mode::ByName files join a group as well.
+TEST_F(AtomicFileTest, AGroupNotCommittedLeavesEveryPathAsItWas) {
+    write("kept.txt", "kept");
+    EXPECT_THROW(
+        {
+            CommitGroup group;
+            AtomicFile a(path("kept.txt"), "test file");
+            a.write(std::string_view("replacement"));
+            a.commit(&group);
+            AtomicFile b(path("by-name.txt"), "library file", AtomicFile::Mode::ByName);
+            std::ofstream(b.temporary_path()) << "written by name";
+            b.commit(&group);
+            EXPECT_EQ(listing().size(), 3u);
+            throw Boom();
+        },
+        Boom);
+    EXPECT_EQ(listing(), std::vector<std::string>{"kept.txt"});
+    EXPECT_EQ(slurp(path("kept.txt")), "kept");
+
+    CommitGroup group;
+    AtomicFile b(path("by-name.txt"), "library file", AtomicFile::Mode::ByName);
+    std::ofstream(b.temporary_path()) << "written by name";
+    b.commit(&group);
+    group.commit();
+    EXPECT_EQ(slurp(path("by-name.txt")), "written by name");
+    EXPECT_EQ(listing(), (std::vector<std::string>{"by-name.txt", "kept.txt"}));
+}
+
+// The group's commit fails at its second file (a folder appeared at its path, so the rename
+// fails): the error names that file as AtomicFile's does, the file before it is in place and
+// complete, the one after it is discarded, and no temporary is left.
+TEST_F(AtomicFileTest, AGroupThatFailsKeepsTheFilesBeforeAndDiscardsTheRest) {
+    write("third", "third's old content");
+    CommitGroup group;
+    for (const char* name : {"first", "second", "third"}) {
+        AtomicFile f(path(name), "test file");
+        f.write(std::string_view(name));
+        f.commit(&group);
+    }
+    fs::create_directories(dir / "second" / "inside");
+    const std::string msg = message_of([&] { group.commit(); });
+    EXPECT_EQ(msg.rfind("cannot write test file '" + path("second") + "': renaming the temporary file '", 0), 0u) << msg;
+    EXPECT_NE(msg.find("' onto it failed: "), std::string::npos) << msg;
+    EXPECT_EQ(slurp(path("first")), "first");
+    EXPECT_EQ(listing_of(dir / "second"), std::vector<std::string>{"inside"});
+    EXPECT_EQ(slurp(path("third")), "third's old content");
+    EXPECT_EQ(listing(), (std::vector<std::string>{"first", "second", "third"}));
+    EXPECT_EQ(group.size(), 0u);
+}
+
 // ---- AtomicFolder --------------------------------------------------------------------------
 
 TEST_F(AtomicFolderTest, UncommittedLeavesNothing) {
@@ -439,6 +539,71 @@ TEST_F(AtomicFileTest, KilledWriterNeverLeavesAPartialFile) {
         fs::remove(target);
     }
     for (const auto& [what, n] : outcomes) std::printf("killed writer: target %s %d times\n", what.c_str(), n);
+}
+
+// The same for three files of 1 MiB committed together (CommitGroup), with the kill anywhere from
+// the first write to after the group's commit returned: each target is absent (or its old
+// content) or complete, never partial, and all three are complete once the commit returned.
+TEST_F(AtomicFileTest, KilledGroupWriterNeverLeavesAPartialFile) {
+    constexpr int kFiles = 3, kSteps = 4 * kFiles, kIterations = 16;
+    std::mt19937 rng(20261205);
+    std::map<std::string, int> outcomes;
+    for (int it = 0; it < kIterations; ++it) {
+        SCOPED_TRACE("iteration " + std::to_string(it));
+        std::vector<std::string> targets, bytes;
+        for (int k = 0; k < kFiles; ++k) {
+            targets.push_back(path("file" + std::to_string(k)));
+            bytes.push_back(pattern(4 * kChunk, 300 + static_cast<std::uint32_t>(kFiles * it + k)));
+        }
+        const bool had_old = it % 2 == 1;
+        if (had_old)
+            for (const auto& t : targets) spit(t, "old " + t);
+        const int steps = std::min<int>(kSteps + 1, static_cast<int>(rng() % (4 * (kSteps + 1) / 3)));
+        const int delay = static_cast<int>(rng() % 400);
+        ASSERT_TRUE(Child::run_and_kill(
+            [&](const std::function<void()>& step) {
+                CommitGroup group;
+                for (int k = 0; k < kFiles; ++k) {
+                    AtomicFile f(targets[static_cast<std::size_t>(k)], "test file");
+                    for (int c = 0; c < 4; ++c) {
+                        f.write(bytes[static_cast<std::size_t>(k)].data() + static_cast<std::size_t>(c) * kChunk, kChunk);
+                        if (c < 3) step();
+                    }
+                    f.commit(&group);
+                    step();
+                }
+                group.commit();
+                step();
+            },
+            steps, delay));
+        for (int k = 0; k < kFiles; ++k) {
+            const std::string& t = targets[static_cast<std::size_t>(k)];
+            std::string what;
+            if (!fs::exists(t)) {
+                EXPECT_FALSE(had_old) << "the old file vanished";
+                what = "absent";
+            } else {
+                const std::string got = slurp(t);
+                if (got == bytes[static_cast<std::size_t>(k)])
+                    what = "complete";
+                else if (had_old && got == "old " + t)
+                    what = "old";
+                else
+                    ADD_FAILURE() << "partial or corrupt target " << t << ": " << got.size() << " bytes";
+            }
+            if (steps == kSteps + 1) {
+                EXPECT_EQ(what, "complete") << "killed after the group's commit returned";
+            }
+            ++outcomes[what];
+        }
+        for (const std::string& name : listing()) {
+            if (name.rfind("file", 0) == 0) continue;
+            EXPECT_TRUE(AtomicFile::is_temporary_name(name)) << name;
+            fs::remove(dir / name);
+        }
+        for (const auto& t : targets) fs::remove(t);
+    }
+    for (const auto& [what, n] : outcomes) std::printf("killed group writer: a target %s %d times\n", what.c_str(), n);
 }
 
 // The same for a folder of 8 files of 256 KiB (each written with AtomicFile, one step each):
