@@ -103,6 +103,51 @@ struct Setup {
     float* out[kChannelCount];
 };
 
+// The entries of row r above the threshold, into w.cols and w.vals (columns increasing).
+void kept_entries(const Setup& s, std::int64_t r, Scratch& w) {
+    const CsrMatrix& T = *s.T;
+    w.cols.clear();
+    w.vals.clear();
+    for (auto i = static_cast<std::size_t>(T.indptr[static_cast<std::size_t>(r)]);
+         i < static_cast<std::size_t>(T.indptr[static_cast<std::size_t>(r) + 1]); ++i) {
+        const double v = static_cast<double>(T.data[i]);
+        if (v > s.threshold) {
+            w.cols.push_back(T.indices[i]);
+            w.vals.push_back(v);
+        }
+    }
+}
+
+// The value-weighted mean display pixel of a row's kept entries (w.pts, w.vals; at least one),
+// as offsets (mx, my) from the first one, o, and as a position (x, y) in mm on the display.
+// Moments about the first pixel: the offsets are small exact integers, so a single pixel gives a
+// mean offset of exactly 0 (and a covariance of exactly 0), and nothing cancels against the
+// absolute position. (x, y) = (q, -p): y up.
+struct Mean {
+    Pixel o;
+    double wsum, mx, my;
+    double x, y;
+};
+
+Mean row_mean(const Setup& s, const Scratch& w) {
+    Mean m;
+    m.o = w.pts.front();
+    double wsum = 0, sx = 0, sy = 0;
+    for (std::size_t i = 0; i < w.pts.size(); ++i) {
+        wsum += w.vals[i];
+        sx += w.vals[i] * static_cast<double>(w.pts[i].q - m.o.q);
+        sy += w.vals[i] * static_cast<double>(m.o.p - w.pts[i].p);
+    }
+    m.wsum = wsum;
+    m.mx = sx / wsum;
+    m.my = sy / wsum;
+    const double mean_q = static_cast<double>(m.o.q) + m.mx;
+    const double mean_p = static_cast<double>(m.o.p) - m.my;
+    m.x = -0.5 * s.width + (mean_q + 0.5) * (s.width / s.Qd);
+    m.y = 0.5 * s.height - (mean_p + 0.5) * (s.height / s.Pd);
+    return m;
+}
+
 void row_features(const Setup& s, std::int64_t r, Scratch& w) {
     const CsrMatrix& T = *s.T;
     const auto b = static_cast<std::size_t>(T.indptr[static_cast<std::size_t>(r)]);
@@ -150,17 +195,9 @@ void row_features(const Setup& s, std::int64_t r, Scratch& w) {
         const std::int64_t d2 = squared_diameter(w.pts, w.hull);
         diameter = std::sqrt(static_cast<double>(d2));
 
-        // Moments about the first pixel: the offsets are small exact integers, so a single pixel
-        // gives a mean offset of exactly 0 and a covariance of exactly 0, and nothing cancels
-        // against the absolute position. (x, y) = (q, -p): y up.
-        const Pixel o = w.pts.front();
-        double wsum = 0, sx = 0, sy = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            wsum += w.vals[i];
-            sx += w.vals[i] * static_cast<double>(w.pts[i].q - o.q);
-            sy += w.vals[i] * static_cast<double>(o.p - w.pts[i].p);
-        }
-        const double mx = sx / wsum, my = sy / wsum;
+        const Mean mean = row_mean(s, w);
+        const Pixel o = mean.o;
+        const double wsum = mean.wsum, mx = mean.mx, my = mean.my;
         double cxx = 0, cxy = 0, cyy = 0;
         for (std::size_t i = 0; i < n; ++i) {
             const double dx = static_cast<double>(w.pts[i].q - o.q) - mx;
@@ -182,10 +219,8 @@ void row_features(const Setup& s, std::int64_t r, Scratch& w) {
         angle = (cxy == 0.0 && half == 0.0) ? 0.0 : 0.5 * std::atan2(2.0 * cxy, cxx - cyy) * (180.0 / kPi);
         if (angle <= -90.0) angle += 180.0;
 
-        const double mean_q = static_cast<double>(o.q) + mx;
-        const double mean_p = static_cast<double>(o.p) - my;
-        mean_x = -0.5 * s.width + (mean_q + 0.5) * (s.width / s.Qd);
-        mean_y = 0.5 * s.height - (mean_p + 0.5) * (s.height / s.Pd);
+        mean_x = mean.x;
+        mean_y = mean.y;
 
         // Robust: the largest values first until the fraction of the energy is reached.
         w.order.resize(n);
@@ -368,6 +403,49 @@ FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camer
     tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, T.rows, 64), [&](const tbb::blocked_range<std::int64_t>& range) {
         Scratch w;
         for (std::int64_t r = range.begin(); r != range.end(); ++r) row_features(s, r, w);
+    });
+    return out;
+}
+
+std::vector<float> mean_positions(const CsrMatrix& T, const std::vector<long>& rows, const DisplayGrid& display,
+                                  double threshold) {
+    const char* who = "mean_positions";
+    auto fail = [&](const std::string& what) { throw std::invalid_argument(std::string(who) + ": " + what); };
+    if (display.Q < 1 || display.P < 1 || !(std::isfinite(display.width) && display.width > 0) ||
+        !(std::isfinite(display.height) && display.height > 0))
+        fail("the display must have at least one column and one row and a finite, positive size");
+    if (!(std::isfinite(threshold) && threshold >= 0)) fail("threshold must be finite and >= 0");
+    check_matrix(T, who);
+    if (T.cols != static_cast<std::int64_t>(display.P) * display.Q)
+        fail("T has " + std::to_string(T.cols) + " columns but the display has P * Q = " +
+             std::to_string(static_cast<std::int64_t>(display.P) * display.Q) + " pixels");
+    for (const long r : rows)
+        if (r < 0 || r >= T.rows) fail("row " + std::to_string(r) + " is not a row of T (" + std::to_string(T.rows) + " rows)");
+
+    Setup s{};
+    s.T = &T;
+    s.Q = display.Q;
+    s.width = display.width;
+    s.height = display.height;
+    s.Pd = static_cast<double>(display.P);
+    s.Qd = static_cast<double>(display.Q);
+    s.threshold = threshold;
+    std::vector<float> out(2 * rows.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
+        Scratch w;
+        for (std::size_t j = range.begin(); j != range.end(); ++j) {
+            kept_entries(s, rows[j], w);
+            double x = kNaN, y = kNaN;
+            if (!w.cols.empty()) {
+                w.pts.resize(w.cols.size());
+                for (std::size_t i = 0; i < w.cols.size(); ++i) w.pts[i] = {w.cols[i] / s.Q, w.cols[i] % s.Q};
+                const Mean m = row_mean(s, w);
+                x = m.x;
+                y = m.y;
+            }
+            out[2 * j] = static_cast<float>(x);
+            out[2 * j + 1] = static_cast<float>(y);
+        }
     });
     return out;
 }

@@ -110,6 +110,16 @@ std::string feature_title(const std::string& channel);
 FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camera_rows, const DisplayGrid& display,
                                const FeatureOptions& options, const std::vector<float>* reference_mean = nullptr);
 
+// MeanX and MeanY of the given rows of T only, as (x, y) pairs in the order of `rows`: the
+// values compute_features gives those rows with this threshold (the same arithmetic, shared), NaN
+// for a row with no entry above it. For a reference render that traced a few of the camera's
+// pixels: all channels of every pixel were 56 MB of fresh pages at industrial scale for the
+// two values of a few thousand rows. Throws std::invalid_argument unless T is a valid CSR matrix
+// (CsrMatrix::check) with P * Q columns, the display is as compute_features requires, the
+// threshold is finite and >= 0 and every row is one of T's.
+std::vector<float> mean_positions(const CsrMatrix& T, const std::vector<long>& rows, const DisplayGrid& display,
+                                  double threshold);
+
 // Appends DeflectionX, DeflectionY and Deflection to features computed without a reference, from
 // their MeanX and MeanY: exactly the values compute_features gives with `reference_mean`.
 // Throws std::invalid_argument if the channels are already there or the sizes do not match.

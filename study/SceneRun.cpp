@@ -106,15 +106,12 @@ std::vector<float> defect_free_reference(const Scene& scene, const RenderResult&
     ro.pixels = &met;
     ro.row_sink = nullptr;  // a subset render keeps its small T
     const RenderResult free_render = render(Tracer(free, free_solid, o), ro);
-    FeatureOptions means_only;
-    means_only.dark_block = 0;
-    const FeatureImages m = compute_features(free_render.T, scene.camera.resolution[0], scene.camera.resolution[1],
-                                             display_grid(scene), means_only, nullptr);
-    const auto& fx = m.channel("MeanX");
-    const auto& fy = m.channel("MeanY");
-    for (long k : met) {
-        ref[2 * static_cast<size_t>(k)] = fx[static_cast<size_t>(k)];
-        ref[2 * static_cast<size_t>(k) + 1] = fy[static_cast<size_t>(k)];
+    // The means of the traced rows alone (compute_features's MeanX and MeanY, at its default
+    // threshold), not every channel of every pixel.
+    const std::vector<float> m = mean_positions(free_render.T, met, display_grid(scene), FeatureOptions{}.threshold);
+    for (size_t j = 0; j < met.size(); ++j) {
+        ref[2 * static_cast<size_t>(met[j])] = m[2 * j];
+        ref[2 * static_cast<size_t>(met[j]) + 1] = m[2 * j + 1];
     }
     if (cache) cache->store(key, met, K, ref);
     return ref;

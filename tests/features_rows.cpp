@@ -652,6 +652,43 @@ TEST(FeatureRows, IndependentOfThreadCount) {
     }
 }
 
+// mean_positions gives a subset of rows (in any order, repeated, empty ones among them) exactly
+// the MeanX and MeanY that compute_features gives them (which RandomMatrixAgainstDirectReference
+// checks against the direct reference), bit for bit, NaN included; its preconditions are named.
+TEST(FeatureRows, MeanPositionsOfSomeRowsAreComputeFeaturesMeans) {
+    for (std::uint64_t seed : {4u, 5u}) {
+        const RandomCase c = random_case(seed);
+        std::vector<long> rows;
+        for (long k = c.N * c.M - 1; k >= 0; k -= 3) rows.push_back(k);
+        rows.push_back(0);
+        rows.push_back(0);
+        for (const double threshold : {0.0, 0.25, 0.5}) {
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", threshold " + std::to_string(threshold));
+            const FeatureImages f = compute_features(c.T, c.N, c.M, c.display, opts(threshold));
+            const std::vector<float> m = mean_positions(c.T, rows, c.display, threshold);
+            ASSERT_EQ(m.size(), 2 * rows.size());
+            int empty = 0;
+            for (std::size_t j = 0; j < rows.size(); ++j) {
+                const auto k = static_cast<std::size_t>(rows[j]);
+                EXPECT_EQ(std::memcmp(&m[2 * j], &f.channel("MeanX")[k], sizeof(float)), 0) << "row " << k;
+                EXPECT_EQ(std::memcmp(&m[2 * j + 1], &f.channel("MeanY")[k], sizeof(float)), 0) << "row " << k;
+                empty += std::isnan(m[2 * j]) ? 1 : 0;
+            }
+            EXPECT_GT(empty, 0) << "the case should hold rows with nothing above the threshold";
+            EXPECT_LT(empty, static_cast<int>(rows.size()));
+        }
+    }
+    const CsrMatrix T = make(4, 5, {{{0, 0, 1.f}}, {}});
+    EXPECT_TRUE(mean_positions(T, {}, grid(4, 5), 0.0).empty());
+    const auto has = [](const std::string& msg, const std::string& part) { return msg.find(part) != std::string::npos; };
+    EXPECT_TRUE(has(error_of([&] { mean_positions(T, {2}, grid(4, 5), 0.0); }), "row 2 is not a row of T (2 rows)"));
+    EXPECT_TRUE(has(error_of([&] { mean_positions(T, {-1}, grid(4, 5), 0.0); }), "row -1 is not a row of T"));
+    EXPECT_TRUE(has(error_of([&] { mean_positions(T, {0}, grid(4, 4), 0.0); }),
+                    "T has 20 columns but the display has P * Q = 16 pixels"));
+    EXPECT_TRUE(has(error_of([&] { mean_positions(T, {0}, grid(4, 5), -1.0); }), "threshold must be finite and >= 0"));
+    EXPECT_TRUE(has(error_of([&] { mean_positions(T, {0}, DisplayGrid{5, 4, 0.0, 4.0}, 0.0); }), "the display must"));
+}
+
 TEST(FeatureRows, Preconditions) {
     const CsrMatrix T = make(4, 5, {{{0, 0, 1.f}}, {}});  // 2 rows, 20 columns
     const DisplayGrid d = grid(4, 5);
