@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 #include "io/TemporaryName.h"
 
@@ -103,33 +104,10 @@ void AtomicFile::commit(CommitGroup* group) {
             fail("reopening the temporary file '" + tmp_ + "' failed: " + errno_text(e));
         }
     }
-    if (group) {
-        hand_to(*group);
-        return;
-    }
-    if (::fsync(fd_) != 0) {
-        const int e = errno;
-        fail("syncing the temporary file '" + tmp_ + "' failed: " + errno_text(e));
-    }
-    const int fd = fd_;
-    fd_ = -1;
-    if (::close(fd) != 0) {
-        const int e = errno;
-        fail("closing the temporary file '" + tmp_ + "' failed: " + errno_text(e));
-    }
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-        const int e = errno;
-        fail("renaming the temporary file '" + tmp_ + "' onto it failed: " + errno_text(e));
-    }
-    live_ = false;
-    tmp_.clear();
-    try {
-        fsync_folder(detail::folder_of(path_).string());
-    } catch (const std::exception& e) {
-        throw std::runtime_error("cannot write " + kind_ + " '" + path_ +
-                                 "': the file is complete and in place, but its name may not survive a crash: " +
-                                 e.what());
-    }
+    // Committed alone, the file is a group of one: the same steps, the same messages.
+    CommitGroup alone;
+    hand_to(group ? *group : alone);
+    if (!group) alone.commit();
 }
 
 void AtomicFile::hand_to(CommitGroup& group) {
@@ -203,9 +181,9 @@ void CommitGroup::commit() {
             for (File& f : files) discard(f);
         }
     } owner{files};
-    std::vector<std::string> folders;  // distinct, in the order of the files
+    std::vector<std::pair<std::string, const File*>> folders;  // distinct, each with its first file
     for (File& f : files) {
-        // The same messages as commit()'s (errno is read before any string is built).
+        // errno is read before any string is built.
         const auto failed = [&](int e, const char* step, const char* after) {
             throw std::runtime_error("cannot write " + f.kind + " '" + f.path + "': " + step + " the temporary file '" +
                                      f.tmp + "'" + after + " failed: " + errno_text(e));
@@ -216,15 +194,17 @@ void CommitGroup::commit() {
         if (::close(fd) != 0) failed(errno, "closing", "");
         if (std::rename(f.tmp.c_str(), f.path.c_str()) != 0) failed(errno, "renaming", " onto it");
         f.tmp.clear();  // in place: nothing left to discard
-        const std::string folder = detail::folder_of(f.path).string();
-        if (std::find(folders.begin(), folders.end(), folder) == folders.end()) folders.push_back(folder);
+        std::string folder = detail::folder_of(f.path).string();
+        if (std::none_of(folders.begin(), folders.end(), [&](const auto& g) { return g.first == folder; }))
+            folders.emplace_back(std::move(folder), &f);
     }
-    for (const std::string& folder : folders) {
+    for (const auto& [folder, first] : folders) {
         try {
             fsync_folder(folder);
         } catch (const std::exception& e) {
-            throw std::runtime_error("cannot write the files committed together in '" + folder +
-                                     "': they are complete and in place, but their names may not survive a crash: " +
+            throw std::runtime_error("cannot write " + first->kind + " '" + first->path +
+                                     "': the file is complete and in place, but its name may not survive a crash" +
+                                     (files.size() > 1 ? " (nor those of the files committed with it)" : "") + ": " +
                                      e.what());
         }
     }

@@ -79,7 +79,7 @@ public:
     // write stage's thread time. Only a hint: commit's fsync is what makes the bytes durable.
     static constexpr std::uint64_t kWritebackBytes = 4u << 20;
 
-    // fsync, close, rename onto path(), fsync the folder. After it, the object holds nothing; any
+    // fsync, close, rename onto path(), fsync the folder (as a CommitGroup of this one file). After it, the object holds nothing; any
     // further write() or commit() is an error. If it throws, the temporary is gone and path() is as
     // it was before, except when only the final folder sync failed (the message says so): then
     // the new file is in place but its name may not survive a power loss.
