@@ -1,5 +1,7 @@
 #include "features/Features.h"
 
+#include "io/Pages.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -379,7 +381,14 @@ FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camer
     out.height = camera_rows;
     const auto& names = feature_channel_names(reference_mean != nullptr);
     out.channels.reserve(names.size());
-    for (const auto& name : names) out.channels.emplace_back(name, std::vector<float>(static_cast<std::size_t>(N * M)));
+    // Each channel is N * M fresh floats (4 MB at 1000 x 1000): its pages are faulted in huge
+    // (io/Pages.h), as the zeros are written, not one small page at a time.
+    for (const auto& name : names) {
+        std::vector<float> channel;
+        io::reserve_in_huge_pages(channel, static_cast<std::size_t>(N * M));
+        channel.resize(static_cast<std::size_t>(N * M));
+        out.channels.emplace_back(name, std::move(channel));
+    }
 
     Setup s{};
     s.T = &T;

@@ -2,6 +2,8 @@
 // and text drawn with Cairo, the font loaded from its file through FreeType.
 #include "features/Plot.h"
 
+#include "io/Pages.h"
+
 #include <cairo-ft.h>
 #include <cairo.h>
 #include <ft2build.h>
@@ -167,8 +169,10 @@ cairo_font_face_t* font_face() {
 // Memory a caller keeps for pictures it draws again and again (the previews of every render):
 // every page of a fresh picture costs a page fault, about 10 us on a virtual machine, which was a
 // quarter of the default scene's write stage (perf). A Canvas given one draws into `surface`.
+// Its pages are huge ones (io::Scratch): the first preview of each thread faults two instead of
+// 700 small ones at the default scene's size.
 struct PictureMemory {
-    std::vector<std::uint32_t> surface;  // Cairo's RGB24 pixel words
+    io::Scratch<std::uint32_t> surface;  // Cairo's RGB24 pixel words
 };
 
 // A picture as a Cairo surface holds it: each pixel a 32-bit word 0x00RRGGBB (CAIRO_FORMAT_RGB24,
@@ -198,18 +202,6 @@ void rgb_codes(const std::uint32_t* row, int n, std::uint8_t* out) {
     }
 }
 
-// v resized to n for bytes the caller overwrites: a v too small is replaced by a fresh one with an
-// eighth more room (for the next, slightly larger picture) instead of grown, which would copy the
-// old bytes into new pages and fault each page twice.
-template <class T>
-void reuse(std::vector<T>& v, std::size_t n) {
-    if (v.capacity() < n) {
-        std::vector<T>().swap(v);
-        v.reserve(n + n / 8);
-    }
-    v.resize(n);
-}
-
 class Canvas {
 public:
     // memory (optional): where the surface's pixels live (Cairo's own allocation without it).
@@ -220,8 +212,9 @@ public:
                 throw std::runtime_error("Cairo: cannot make a " + std::to_string(width) + " x " + std::to_string(height) +
                                          " canvas: the width is too large");
             // RGB24's stride is a multiple of 4 bytes: whole words.
-            reuse(memory_->surface, static_cast<std::size_t>(stride / 4) * static_cast<std::size_t>(height > 0 ? height : 0));
-            surface_ = cairo_image_surface_create_for_data(reinterpret_cast<unsigned char*>(memory_->surface.data()),
+            // Uncleared: the canvas is painted white below.
+            words_ = memory_->surface.get(static_cast<std::size_t>(stride / 4) * static_cast<std::size_t>(height > 0 ? height : 0));
+            surface_ = cairo_image_surface_create_for_data(reinterpret_cast<unsigned char*>(words_),
                                                            CAIRO_FORMAT_RGB24, width, height, stride);
         } else {
             surface_ = cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height);
@@ -325,7 +318,7 @@ public:
         SurfacePicture p;
         p.width = cairo_image_surface_get_width(surface_);
         p.height = cairo_image_surface_get_height(surface_);
-        p.pixels = memory_->surface.data();  // the words Cairo drew into
+        p.pixels = words_;  // the words Cairo drew into
         p.stride = static_cast<std::size_t>(cairo_image_surface_get_stride(surface_)) / 4;
         return p;
     }
@@ -356,6 +349,7 @@ public:
 private:
     void set_colour(const Rgb& c) { cairo_set_source_rgb(cr_, c[0], c[1], c[2]); }
     PictureMemory* memory_ = nullptr;
+    std::uint32_t* words_ = nullptr;  // the surface's pixels in memory_
     cairo_surface_t* surface_ = nullptr;
     cairo_t* cr_ = nullptr;
 };

@@ -20,17 +20,6 @@ std::size_t igzip_level_buffer_size(int level) {
     }
 }
 
-unsigned char* ScratchBytes::get(std::size_t n) {
-    if (n > capacity_) {
-        bytes_.reset();  // the old bytes go first: they are not needed, and not copied
-        capacity_ = 0;   // so that a failed allocation below leaves an empty buffer, not a dangling size
-        const std::size_t grown = n <= std::numeric_limits<std::size_t>::max() - n / 8 ? n + n / 8 : n;
-        bytes_.reset(new unsigned char[grown]);  // not value-initialised: no page is touched here
-        capacity_ = grown;
-    }
-    return bytes_.get();
-}
-
 unsigned char* thread_buffer(int slot, std::size_t n) {
     thread_local ScratchBytes buffers[4];
     if (slot < 0 || slot > 3) throw std::invalid_argument("thread_buffer: slot " + std::to_string(slot) + " is outside 0..3");

@@ -14,6 +14,8 @@
 #include <memory>
 #include <vector>
 
+#include "io/Pages.h"  // ScratchBytes
+
 namespace ltm::io {
 
 // igzip's levels: 1 (fastest) to 3 (smallest).
@@ -67,17 +69,6 @@ private:
 // one is not cleared, so that only the pages written are faulted in (a copy and a clearing
 // faulted each page up to three times).
 unsigned char* thread_buffer(int slot, std::size_t n);
-
-// Room a thread keeps for scratch bytes it fully writes before it reads them: grown (with an
-// eighth more, for the next slightly larger picture) by a fresh, uncleared allocation.
-class ScratchBytes {
-public:
-    unsigned char* get(std::size_t n);
-
-private:
-    std::unique_ptr<unsigned char[]> bytes_;
-    std::size_t capacity_ = 0;
-};
 
 // The CRC-32 of ZIP, gzip and PNG (ISO 3309, reflected, as zlib's crc32) of p[0, n), continuing
 // from `crc` (0 to start): crc32(crc32(0, a), b) is the CRC of a followed by b.

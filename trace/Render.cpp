@@ -1,5 +1,7 @@
 #include "trace/Render.h"
 
+#include "io/Pages.h"
+
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 #include <tbb/task_arena.h>
@@ -302,10 +304,10 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     // The entries' arrays are reserved once for the most entries the render can hold: one per
     // branch a camera sample ends in (one with the sample estimator, at most 2^split_depth with
     // the split one), and no more than the budget lets it hold before it streams (plus one wave).
-    // A reservation's pages are mapped only as they are written, so memory is what T fills; the
-    // arrays never grow by copying (unless a render without a budget outgrows kUnbudgeted), and
-    // a whole T is moved out at the end, not copied: each copy's first touches of fresh pages
-    // were most of the serial time of a short render.
+    // A reservation's pages are mapped only as they are written (in huge pages, 2 MiB at a time),
+    // so memory is what T fills; the arrays never grow by copying (unless a render without a
+    // budget outgrows kUnbudgeted), and a whole T is moved out at the end, not copied: each copy's
+    // first touches of fresh pages were most of the serial time of a short render.
     std::vector<std::int32_t> held_indices;
     std::vector<float> held_data;
     std::vector<std::int64_t> indptr;
@@ -318,8 +320,9 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         constexpr double kUnbudgeted = double(std::size_t(1) << 27);  // entries: 512 MiB per array
         const double cap = streaming ? static_cast<double>(opt.max_matrix_bytes) / 8.0 + per_wave : kUnbudgeted;
         const double most = std::min(branches * spp * static_cast<double>(items), cap);
-        held_indices.reserve(static_cast<size_t>(most));
-        held_data.reserve(static_cast<size_t>(most));
+        // In huge pages (io/Pages.h): T's arrays are most of the fresh memory a render touches.
+        io::reserve_in_huge_pages(held_indices, static_cast<size_t>(most));
+        io::reserve_in_huge_pages(held_data, static_cast<size_t>(most));
     }
     std::int64_t sent_rows = 0;  // rows already given to the sink
     std::size_t total_nnz = 0;

@@ -1,0 +1,163 @@
+// io/Pages.h: huge-page advice lands on the whole 2 MiB pages of a buffer and nowhere else, never
+// changes a byte, and the scratch storage is aligned, sized and replaced as documented.
+//
+// The kernel's verdict is read from /proc/self/smaps: each mapping's "THPeligible" line is 1 when
+// the kernel may back it with transparent huge pages (Linux >= 5.8 prints it for every mapping).
+// Whether it then finds free huge pages is the machine's state, not the contract: not asserted.
+#include <gtest/gtest.h>
+
+#include <sys/mman.h>
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/Pages.h"
+
+using ltm::io::kHugePageBytes;
+
+namespace {
+
+// The system's mode ("always", "madvise" or "never"), from the bracketed word; empty if unknown.
+std::string thp_mode() {
+    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string line;
+    if (!std::getline(in, line)) return {};
+    const auto open = line.find('['), close = line.find(']');
+    if (open == std::string::npos || close == std::string::npos || close < open) return {};
+    return line.substr(open + 1, close - open - 1);
+}
+
+// THPeligible of the mapping holding p, or nothing where smaps does not say.
+std::optional<bool> thp_eligible(const void* p) {
+    const auto a = reinterpret_cast<std::uintptr_t>(p);
+    std::ifstream in("/proc/self/smaps");
+    std::string line;
+    bool inside = false;
+    while (std::getline(in, line)) {
+        std::uintptr_t lo = 0, hi = 0;
+        char dash = 0;
+        std::istringstream head(line);
+        if (head >> std::hex >> lo >> dash >> hi && dash == '-' && line.find(':') > line.find(' ')) {
+            inside = lo <= a && a < hi;  // a mapping's first line: "lo-hi perms offset dev inode path"
+            continue;
+        }
+        if (inside && line.rfind("THPeligible:", 0) == 0) return line.find('1') != std::string::npos;
+    }
+    return std::nullopt;
+}
+
+// An anonymous mapping of `huge` huge pages, aligned to them (mapped with one more, then trimmed).
+struct AlignedMapping {
+    explicit AlignedMapping(std::size_t huge) : bytes(huge * kHugePageBytes) {
+        const std::size_t over = bytes + kHugePageBytes;
+        void* m = ::mmap(nullptr, over, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (m == MAP_FAILED) return;
+        const auto a = reinterpret_cast<std::uintptr_t>(m);
+        const std::uintptr_t first = (a + kHugePageBytes - 1) & ~(kHugePageBytes - 1);
+        if (first > a) ::munmap(m, first - a);
+        if (a + over > first + bytes) ::munmap(reinterpret_cast<void*>(first + bytes), a + over - (first + bytes));
+        p = reinterpret_cast<unsigned char*>(first);
+    }
+    ~AlignedMapping() {
+        if (p) ::munmap(p, bytes);
+    }
+    std::size_t bytes;
+    unsigned char* p = nullptr;
+};
+
+// The advice matters only in "madvise" mode: in "always" every large mapping is eligible
+// already, in "never" none is.
+bool advice_decides() { return thp_mode() == "madvise"; }
+
+}  // namespace
+
+TEST(Pages, AdviceMakesTheWholeHugePagesInsideABufferEligibleAndNothingElse) {
+    if (!advice_decides()) GTEST_SKIP() << "transparent huge pages are in mode '" << thp_mode() << "', not 'madvise'";
+    AlignedMapping m(4);
+    ASSERT_NE(m.p, nullptr);
+    const auto before = thp_eligible(m.p + kHugePageBytes);
+    if (!before) GTEST_SKIP() << "/proc/self/smaps has no THPeligible lines (Linux < 5.8)";
+    EXPECT_FALSE(*before) << "an anonymous mapping is not eligible before the advice in 'madvise' mode";
+
+    // A buffer from the middle of the first huge page to the middle of the fourth holds the
+    // second and third whole: those are advised, the first and fourth are not.
+    ltm::io::advise_huge_pages(m.p + kHugePageBytes / 2, 3 * kHugePageBytes);
+    EXPECT_EQ(thp_eligible(m.p + kHugePageBytes), std::optional<bool>(true));
+    EXPECT_EQ(thp_eligible(m.p + 2 * kHugePageBytes), std::optional<bool>(true));
+    EXPECT_EQ(thp_eligible(m.p), std::optional<bool>(false));
+    EXPECT_EQ(thp_eligible(m.p + 3 * kHugePageBytes), std::optional<bool>(false));
+}
+
+TEST(Pages, ABufferHoldingNoWholeHugePageIsNotAdvised) {
+    if (!advice_decides()) GTEST_SKIP() << "transparent huge pages are in mode '" << thp_mode() << "', not 'madvise'";
+    AlignedMapping m(2);
+    ASSERT_NE(m.p, nullptr);
+    if (!thp_eligible(m.p)) GTEST_SKIP() << "/proc/self/smaps has no THPeligible lines (Linux < 5.8)";
+    // 2 MiB straddling the boundary between the two huge pages: neither lies inside it.
+    ltm::io::advise_huge_pages(m.p + kHugePageBytes / 2, kHugePageBytes);
+    EXPECT_EQ(thp_eligible(m.p), std::optional<bool>(false));
+    EXPECT_EQ(thp_eligible(m.p + kHugePageBytes), std::optional<bool>(false));
+    // Less than one huge page, or no buffer: nothing, and no failure.
+    ltm::io::advise_huge_pages(m.p, kHugePageBytes - 1);
+    EXPECT_EQ(thp_eligible(m.p), std::optional<bool>(false));
+    ltm::io::advise_huge_pages(nullptr, 8 * kHugePageBytes);
+}
+
+TEST(Pages, AdviceNeverChangesABuffersBytes) {
+    std::vector<std::uint32_t> v(3 * kHugePageBytes / 4 + 12345);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<std::uint32_t>(i * 2654435761u);
+    const std::vector<std::uint32_t> copy = v;
+    ltm::io::advise_huge_pages(v.data(), v.size() * sizeof(v[0]));
+    EXPECT_EQ(v, copy);
+    // reserve_in_huge_pages keeps what a vector holds, and its room is at least what was asked.
+    std::vector<std::uint32_t> w = copy;
+    ltm::io::reserve_in_huge_pages(w, 4 * copy.size());
+    EXPECT_GE(w.capacity(), 4 * copy.size());
+    EXPECT_EQ(w, copy);
+}
+
+TEST(Pages, LargeAllocationsAreWholeAdvisedHugePages) {
+    void* p = ltm::io::allocate_pages(3 * kHugePageBytes + 1);  // rounded up to four huge pages
+    ASSERT_NE(p, nullptr);
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % kHugePageBytes, 0u);
+    std::memset(p, 0x5a, 4 * kHugePageBytes);  // all four are the caller's to write
+    if (advice_decides() && thp_eligible(p)) {
+        for (int k = 0; k < 4; ++k)
+            EXPECT_EQ(thp_eligible(static_cast<unsigned char*>(p) + k * kHugePageBytes), std::optional<bool>(true)) << k;
+    }
+    ltm::io::PagesDeleter{}(p);
+    // A small one is malloc's, writable for its size, and also freed with std::free.
+    void* q = ltm::io::allocate_pages(100);
+    ASSERT_NE(q, nullptr);
+    std::memset(q, 1, 100);
+    ltm::io::PagesDeleter{}(q);
+    void* z = ltm::io::allocate_pages(0);  // a zero-size request still gets a pointer to free
+    ASSERT_NE(z, nullptr);
+    ltm::io::PagesDeleter{}(z);
+}
+
+TEST(Pages, ScratchGrowsByAnEighthAndKeepsItsRoomForSmallerRequests) {
+    ltm::io::Scratch<double> s;
+    EXPECT_EQ(s.capacity(), 0u);
+    double* a = s.get(800);
+    ASSERT_NE(a, nullptr);
+    EXPECT_EQ(s.capacity(), 900u);  // 800 + 800 / 8
+    a[899] = 1.0;                   // the whole room is writable
+    EXPECT_EQ(s.get(900), a);       // within the room: the same storage
+    EXPECT_EQ(s.get(10), a);
+    double* b = s.get(901);  // beyond: fresh storage, 901 + 112
+    ASSERT_NE(b, nullptr);
+    EXPECT_EQ(s.capacity(), 1013u);
+    b[1012] = 2.0;
+    // A request whose bytes overflow size_t is refused, not wrapped around to a small buffer, and
+    // the scratch is left empty.
+    EXPECT_THROW(s.get(std::numeric_limits<std::size_t>::max() / 4), std::bad_alloc);
+    EXPECT_EQ(s.capacity(), 0u);
+    EXPECT_NE(s.get(5), nullptr);
+}
