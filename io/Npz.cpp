@@ -159,7 +159,24 @@ struct Deflater {
     // in the cache.
     static constexpr std::size_t kPiece = 256 * 1024;
 
-    explicit Deflater(int lvl) : level(lvl), level_buf(igzip_level_buffer_size(lvl)), out(kPiece) {}
+    // The working memory and the output piece are the thread's, kept from its last archive:
+    // fresh ones for every archive faulted half a megabyte of new pages in each (two archives a
+    // render, and tens of thousands in a dataset). They are borrowed while the deflater lives and
+    // given back after; an archive begun on a thread while another is open there gets fresh ones.
+    explicit Deflater(int lvl) : level(lvl) {
+        Kept& k = kept();
+        level_buf.swap(k.level_buf[lvl]);
+        out.swap(k.out);
+        level_buf.resize(igzip_level_buffer_size(lvl));  // cleared by start() for each entry
+        out.resize(kPiece);
+    }
+    ~Deflater() {
+        Kept& k = kept();
+        k.level_buf[level].swap(level_buf);
+        k.out.swap(out);
+    }
+    Deflater(const Deflater&) = delete;
+    Deflater& operator=(const Deflater&) = delete;
     // A new stream, from a zeroed state and working memory: isal_deflate_init leaves part of the
     // stream's state as it was, and igzip's tables keep the previous stream's traces, which would
     // make an entry's bytes depend on the entries before it (io/Deflate.cpp does the same).
@@ -176,6 +193,16 @@ struct Deflater {
         crc = 0;
     }
     bool finished() const { return z.internal_state.state == ZSTATE_END && head == tail; }
+
+private:
+    struct Kept {
+        std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
+        std::vector<unsigned char> out;
+    };
+    static Kept& kept() {
+        thread_local Kept k;
+        return k;
+    }
 };
 
 // From this size on, a deflated entry gets a ZIP64 local header. libzip decides that header
