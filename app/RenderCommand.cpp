@@ -12,6 +12,7 @@
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
 #include "app/SceneSetup.h"
+#include "io/AtomicFile.h"
 #include "io/Image.h"
 #include "scene/SceneJson.h"
 #include "io/LtmFile.h"
@@ -174,10 +175,12 @@ int run(const RenderArgs& a) {
             std::vector<float> y(r.image.begin(), r.image.end()), se(r.image_stderr.begin(), r.image_stderr.end());
             std::vector<fs::path> written;
             try {
-                write_exr((dir / "image.exr").string(), N, M, {{"Image", y}, {"StdError", se}});
-                written.push_back(dir / "image.exr");
-                write_npz_channels((dir / "image.npz").string(), N, M, {{"Image", y}, {"StdError", se}});
-                written.push_back(dir / "image.npz");
+                // Made durable together, as a render folder's files are (write_render_folder): a
+                // failure before the group's commit leaves every path as it was; after, the files
+                // in place are removed (run.json, written last, marks a complete folder).
+                io::CommitGroup group;
+                write_exr((dir / "image.exr").string(), N, M, {{"Image", y}, {"StdError", se}}, &group);
+                write_npz_channels((dir / "image.npz").string(), N, M, {{"Image", y}, {"StdError", se}}, &group);
                 if (!a.no_previews) {
                     Image preview;
                     preview.width = N;
@@ -186,9 +189,11 @@ int run(const RenderArgs& a) {
                     double peak = 0;
                     for (double v : r.image) peak = std::max(peak, v);
                     for (double v : r.image) preview.data.push_back(static_cast<float>(peak > 0 ? v / peak : 0.0));
-                    write_png((dir / "image.png").string(), preview);
-                    written.push_back(dir / "image.png");
+                    write_png((dir / "image.png").string(), preview, &group);
                 }
+                written = {dir / "image.exr", dir / "image.npz"};
+                if (!a.no_previews) written.push_back(dir / "image.png");
+                group.commit();
                 write_run_json(a.dir, scene, r, representation, a.threads,
                                {{"pattern", a.pattern}, {"image", "image.exr"}, {"previews", !a.no_previews}},
                                report, memory_json(run.render_memory, r, 0, 0));

@@ -157,11 +157,12 @@ void write_png_file(const std::string& path, int width, int height, int bit_dept
 
 // The same from `size` bytes of rows in memory.
 void write_png_file(const std::string& path, int width, int height, int bit_depth, int color_type,
-                    const unsigned char* samples, std::size_t size) {
+                    const unsigned char* samples, std::size_t size, io::CommitGroup* group = nullptr) {
     const std::size_t rowbytes = size / static_cast<std::size_t>(height);
-    write_png_file(path, width, height, bit_depth, color_type, rowbytes, [&](int r, std::uint8_t* out) {
-        std::memcpy(out, samples + static_cast<std::size_t>(r) * rowbytes, rowbytes);
-    });
+    write_png_file(
+        path, width, height, bit_depth, color_type, rowbytes,
+        [&](int r, std::uint8_t* out) { std::memcpy(out, samples + static_cast<std::size_t>(r) * rowbytes, rowbytes); },
+        group);
 }
 
 // Decodes into `pixels` (8 or 16-bit samples, 1 or 3 channels); false with io.message on error.
@@ -381,7 +382,7 @@ void check_8bit_picture(const Picture& img, const std::string& path) {
 }
 }  // namespace
 
-void write_png(const std::string& path, const Image& img) {
+void write_png(const std::string& path, const Image& img, io::CommitGroup* group) {
     auto fail = [&](const std::string& why) { throw std::runtime_error("cannot write PNG image '" + path + "': " + why); };
     check_8bit_picture(img, path);
     Image8 codes;
@@ -398,13 +399,13 @@ void write_png(const std::string& path, const Image& img) {
         }
         codes.data[i] = png_code(v);
     }
-    write_png(path, codes);
+    write_png(path, codes, group);
 }
 
-void write_png(const std::string& path, const Image8& img) {
+void write_png(const std::string& path, const Image8& img, io::CommitGroup* group) {
     check_8bit_picture(img, path);
     write_png_file(path, img.width, img.height, 8, img.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB,
-                   img.data.data(), img.data.size());
+                   img.data.data(), img.data.size(), group);
 }
 
 void write_png_rows(const std::string& path, int width, int height, int channels,

@@ -101,16 +101,16 @@ std::vector<float> pattern_values(const Image& img);
 // takes 0.12 s, for 9.8 MB instead of 8.6 (the default scene's: 45 -> 16 ms, 507 -> 539 kB);
 // igzip's level 1 is no faster and level 3 slower (one thread, best of 5 writes of the 17 pictures).
 inline constexpr int kPngLevel = 2;
-void write_png(const std::string& path, const Image& img);
+void write_png(const std::string& path, const Image& img, io::CommitGroup* group = nullptr);
 // The same for code values as they are (png_code's); the same file as write_png of the Image
 // whose values are these codes / 255.
-void write_png(const std::string& path, const Image8& img);
+void write_png(const std::string& path, const Image8& img, io::CommitGroup* group = nullptr);
 // The same file as write_png of an 8-bit picture of `channels` (1 or 3) code values, its rows
 // produced on demand: row(r, out) writes row r's width * channels codes to out (r from 0, the
 // top, to height - 1, once each, in order). For a picture held in another layout, which then
 // need not be copied whole into an Image8 first (a preview drawn in a Cairo surface).
 // With `group`, the file is committed into it (io/AtomicFile.h's CommitGroup: in place at
-// group->commit()), as are the EXR and npz files below.
+// group->commit()), as write_png's and the EXR and npz files' below.
 void write_png_rows(const std::string& path, int width, int height, int channels,
                     const std::function<void(int, std::uint8_t*)>& row, io::CommitGroup* group = nullptr);
 

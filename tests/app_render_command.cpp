@@ -422,6 +422,30 @@ TEST_F(RenderCommand, PatternThatDoesNotExist) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+// A pattern render that fails part-way leaves the folder's earlier files as they were: its image
+// files are made durable together (io::CommitGroup) and put in place only when all are written.
+// Here the preview cannot be written (its path is a folder), after image.exr and image.npz were:
+// the earlier render's image.exr, image.npz and run.json keep their bytes (before, the new
+// image.exr replaced the old one and was then removed with it).
+TEST_F(RenderCommand, APatternRenderThatFailsLeavesTheEarlierFilesAsTheyWere) {
+    const fs::path png = dir / "on.png";
+    write_gray_png(png, kQ, kP, std::vector<std::uint8_t>(static_cast<std::size_t>(kP * kQ), 255));
+    const fs::path out = dir / "out";
+    ASSERT_EQ(ltmsim(render(scene, out, "--threads 2 --pattern '" + png.string() + "'"), dir).status, 0);
+    ASSERT_TRUE(fs::remove(out / "image.png"));
+    ASSERT_TRUE(fs::create_directory(out / "image.png"));
+    const auto before = snapshot(out);
+    ASSERT_FALSE(before.at("image.exr").empty());
+
+    // Another seed: the new image differs, so a replaced file would show.
+    const fs::path other = write("other.yaml", scene_yaml(4));
+    const Outcome r = ltmsim(render(other, out, "--threads 2 --overwrite --pattern '" + png.string() + "'"), dir);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find((out / "image.png").string()), std::string::npos) << r.err;
+    EXPECT_TRUE(snapshot(out) == before) << "an earlier file changed or went";
+    expect_outputs(out, {"image.exr", "image.npz", "run.json"});
+}
+
 TEST_F(RenderCommand, UnreadableOrMalformedScene) {
     const fs::path out = dir / "out";
     const fs::path missing = dir / "nope.yaml";
