@@ -381,8 +381,8 @@ FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camer
     out.height = camera_rows;
     const auto& names = feature_channel_names(reference_mean != nullptr);
     out.channels.reserve(names.size());
-    // Each channel is N * M fresh floats (4 MB at 1000 x 1000): its pages are faulted in huge
-    // (io/Pages.h), as the zeros are written, not one small page at a time.
+    // Each channel is N * M fresh floats: from 32 MiB a channel (8.4 M pixels) its pages are
+    // faulted in huge (io/Pages.h) as the zeros are written, not one small page at a time.
     for (const auto& name : names) {
         std::vector<float> channel;
         io::reserve_in_huge_pages(channel, static_cast<std::size_t>(N * M));

@@ -164,10 +164,11 @@ struct Deflater {
     // render, and tens of thousands in a dataset). They are borrowed while the deflater lives and
     // given back after; an archive begun on a thread while another is open there gets fresh ones.
     explicit Deflater(int lvl) : level(lvl) {
+        const std::size_t working = igzip_level_buffer_size(lvl);  // checks lvl: 1..3
         Kept& k = kept();
         level_buf.swap(k.level_buf[lvl]);
         out.swap(k.out);
-        level_buf.resize(igzip_level_buffer_size(lvl));  // cleared by start() for each entry
+        level_buf.resize(working);  // cleared by start() for each entry
         out.resize(kPiece);
     }
     ~Deflater() {

@@ -13,7 +13,12 @@
 // The advice changes speed and the granularity of memory, never contents: a huge page is cleared
 // as the small ones are, and a failed or refused madvise leaves ordinary pages. The cost is
 // resident memory rounded up to 2 MiB where a buffer's pages are touched: at most 2 MiB per
-// advised buffer beyond what it uses.
+// advised buffer beyond what it uses (for the scratch buffers, per thread that keeps one).
+//
+// The advice is given only on memory that goes back to the system when it is freed, so that it
+// never outlives its buffer: on this module's own mappings (allocate_pages) and on vector
+// reservations large enough that the C library always maps them apart (kAlwaysMapped). Advice on
+// heap memory would stay there after the free, on whatever small allocations later reuse it.
 #include <cstddef>
 #include <cstdlib>
 #include <memory>
@@ -31,23 +36,26 @@ inline constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;
 // holds, or where the system has no such advice. Never fails: it is advice.
 void advise_huge_pages(const void* p, std::size_t bytes) noexcept;
 
-// v.reserve(n), then the advice on the reserved bytes: for a large array that is filled after this
-// (resize, push_back), so that its pages are faulted in huge. Whole huge pages lie inside any
-// reservation of 4 MiB or more; one of 2-4 MiB may hold none (a vector's storage is not aligned).
+// From this size on, glibc's malloc always serves an allocation by its own mmap and returns it
+// by munmap on free (its dynamic mmap threshold never rises above DEFAULT_MMAP_THRESHOLD_MAX,
+// 32 MiB on 64-bit systems), so advice given on it ends with it.
+inline constexpr std::size_t kAlwaysMapped = std::size_t(32) << 20;
+
+// v.reserve(n), then, for a reservation of kAlwaysMapped bytes or more, the advice on it: for a
+// large array that is filled after this (resize, push_back), so that its pages are faulted in
+// huge (T's entries in a large render). A vector's storage is not aligned: its head and tail
+// short of a whole huge page stay in small pages.
 template <class T>
 void reserve_in_huge_pages(std::vector<T>& v, std::size_t n) {
     v.reserve(n);
-    advise_huge_pages(v.data(), v.capacity() * sizeof(T));
+    if (v.capacity() >= kAlwaysMapped / sizeof(T)) advise_huge_pages(v.data(), v.capacity() * sizeof(T));
 }
 
-// Uninitialised storage of at least `bytes` bytes: from 1 MiB up, aligned to and rounded up to
-// whole huge pages and advised to take them, so that all of it is faulted in huge. Throws
-// std::bad_alloc. Free it with std::free (PagesDeleter).
+// Uninitialised storage of at least `bytes` bytes: from 1 MiB up, a mapping of its own, aligned
+// to and rounded up to whole huge pages and advised to take them, so that all of it is faulted in
+// huge; below, malloc's. Throws std::bad_alloc. Give it back with free_pages and the same size.
 void* allocate_pages(std::size_t bytes);
-
-struct PagesDeleter {
-    void operator()(void* p) const noexcept { std::free(p); }
-};
+void free_pages(void* p, std::size_t bytes) noexcept;
 
 // Room a thread keeps for scratch objects it fully writes before it reads them (the pictures and
 // blocks io/ encodes, a preview's surface): grown (with an eighth more, for the next slightly
@@ -57,27 +65,37 @@ template <class T>
 class Scratch {
     static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_destructible_v<T>,
                   "Scratch holds plain values that need no construction");
+    static_assert(alignof(T) <= alignof(std::max_align_t), "malloc's alignment serves small requests");
 
 public:
+    Scratch() = default;
+    ~Scratch() { release(); }
+    Scratch(const Scratch&) = delete;
+    Scratch& operator=(const Scratch&) = delete;
+
     // At least n objects' room; what the room held before is gone.
     T* get(std::size_t n) {
         if (n > capacity_) {
-            data_.reset();  // the old objects go first: they are not needed, and not copied
-            capacity_ = 0;  // so that a failed allocation below leaves an empty buffer, not a dangling size
+            release();  // the old objects go first: they are not needed, and not copied
             constexpr std::size_t most = static_cast<std::size_t>(-1) / sizeof(T);
             if (n > most) throw std::bad_alloc();
             const std::size_t grown = n <= most - n / 8 ? n + n / 8 : n;
-            // Storage from the allocator has no objects yet; T is an implicit-lifetime type, so
-            // writing it there begins its objects' lifetime (C++20 [intro.object]).
-            data_.reset(static_cast<T*>(allocate_pages(grown * sizeof(T))));
+            // Fresh storage from the system holds no objects yet; T is trivial, and writing it
+            // there makes its values (as for malloc'ed memory).
+            data_ = static_cast<T*>(allocate_pages(grown * sizeof(T)));
             capacity_ = grown;
         }
-        return data_.get();
+        return data_;
     }
     std::size_t capacity() const { return capacity_; }
 
 private:
-    std::unique_ptr<T, PagesDeleter> data_;
+    void release() noexcept {
+        if (data_) free_pages(data_, capacity_ * sizeof(T));
+        data_ = nullptr;  // a failed allocation after this leaves an empty buffer, not a dangling size
+        capacity_ = 0;
+    }
+    T* data_ = nullptr;
     std::size_t capacity_ = 0;
 };
 

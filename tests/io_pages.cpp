@@ -2,14 +2,16 @@
 // changes a byte, and the scratch storage is aligned, sized and replaced as documented.
 //
 // The kernel's verdict is read from /proc/self/smaps: each mapping's "THPeligible" line is 1 when
-// the kernel may back it with transparent huge pages (Linux >= 5.8 prints it for every mapping).
+// the kernel may back it with transparent huge pages (recent kernels print it for every mapping).
 // Whether it then finds free huge pages is the machine's state, not the contract: not asserted.
 #include <gtest/gtest.h>
 
 #include <sys/mman.h>
+#include <sys/prctl.h>
 
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -22,16 +24,6 @@
 using ltm::io::kHugePageBytes;
 
 namespace {
-
-// The system's mode ("always", "madvise" or "never"), from the bracketed word; empty if unknown.
-std::string thp_mode() {
-    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
-    std::string line;
-    if (!std::getline(in, line)) return {};
-    const auto open = line.find('['), close = line.find(']');
-    if (open == std::string::npos || close == std::string::npos || close < open) return {};
-    return line.substr(open + 1, close - open - 1);
-}
 
 // THPeligible of the mapping holding p, or nothing where smaps does not say.
 std::optional<bool> thp_eligible(const void* p) {
@@ -71,9 +63,39 @@ struct AlignedMapping {
     unsigned char* p = nullptr;
 };
 
-// The advice matters only in "madvise" mode: in "always" every large mapping is eligible
-// already, in "never" none is.
-bool advice_decides() { return thp_mode() == "madvise"; }
+// The first word in brackets of a sysfs setting ("[madvise]"), empty if unreadable.
+std::string bracketed(const std::string& file) {
+    std::ifstream in(file);
+    std::string line;
+    if (!std::getline(in, line)) return {};
+    const auto open = line.find('['), close = line.find(']');
+    if (open == std::string::npos || close == std::string::npos || close < open) return {};
+    return line.substr(open + 1, close - open - 1);
+}
+
+// The system's mode ("always", "madvise" or "never"); empty if unknown.
+std::string thp_mode() { return bracketed("/sys/kernel/mm/transparent_hugepage/enabled"); }
+
+// Whether the advice alone decides eligibility for 2 MiB pages here: the system's mode is
+// "madvise" (in "always" every large mapping is eligible already, in "never" none is), the PMD
+// huge page is 2 MiB (not arm64 with 64 KiB pages), no other huge page size is "always" and 2 MiB
+// is not "never" (Linux >= 6.8's per-size settings, which THPeligible also reports), and the
+// process has not had THP disabled (prctl PR_SET_THP_DISABLE, inherited from a wrapper).
+bool advice_decides() {
+    if (thp_mode() != "madvise") return false;
+    std::ifstream pmd("/sys/kernel/mm/transparent_hugepage/hpage_pmd_size");
+    std::size_t size = 0;
+    if (pmd >> size && size != kHugePageBytes) return false;
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator("/sys/kernel/mm/transparent_hugepage", ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.rfind("hugepages-", 0) != 0) continue;
+        const std::string mode = bracketed((e.path() / "enabled").string());
+        if (mode == "always") return false;
+        if (name == "hugepages-2048kB" && mode == "never") return false;
+    }
+    return ::prctl(PR_GET_THP_DISABLE, 0, 0, 0, 0) != 1;
+}
 
 }  // namespace
 
@@ -122,8 +144,26 @@ TEST(Pages, AdviceNeverChangesABuffersBytes) {
     EXPECT_EQ(w, copy);
 }
 
+// A vector reservation is advised from kAlwaysMapped bytes on (memory malloc always maps apart,
+// so the advice ends with it), and not below (it may be heap memory that outlives the vector).
+TEST(Pages, OnlyReservationsThatAreMappedApartAreAdvised) {
+    if (!advice_decides()) GTEST_SKIP() << "the advice does not decide eligibility here (mode '" << thp_mode() << "')";
+    std::vector<float> large;
+    ltm::io::reserve_in_huge_pages(large, ltm::io::kAlwaysMapped / sizeof(float));
+    const auto* middle = reinterpret_cast<const unsigned char*>(large.data()) + ltm::io::kAlwaysMapped / 2;
+    const auto eligible = thp_eligible(middle);
+    if (!eligible) GTEST_SKIP() << "/proc/self/smaps has no THPeligible lines (an older kernel)";
+    EXPECT_TRUE(*eligible) << "a 32 MiB reservation's middle";
+    std::vector<float> small;
+    ltm::io::reserve_in_huge_pages(small, ltm::io::kAlwaysMapped / sizeof(float) / 2 - 4096);
+    EXPECT_EQ(thp_eligible(reinterpret_cast<const unsigned char*>(small.data()) + ltm::io::kAlwaysMapped / 4),
+              std::optional<bool>(false))
+        << "a 16 MiB reservation";
+}
+
 TEST(Pages, LargeAllocationsAreWholeAdvisedHugePages) {
-    void* p = ltm::io::allocate_pages(3 * kHugePageBytes + 1);  // rounded up to four huge pages
+    const std::size_t bytes = 3 * kHugePageBytes + 1;  // rounded up to four huge pages
+    void* p = ltm::io::allocate_pages(bytes);
     ASSERT_NE(p, nullptr);
     EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % kHugePageBytes, 0u);
     std::memset(p, 0x5a, 4 * kHugePageBytes);  // all four are the caller's to write
@@ -131,15 +171,17 @@ TEST(Pages, LargeAllocationsAreWholeAdvisedHugePages) {
         for (int k = 0; k < 4; ++k)
             EXPECT_EQ(thp_eligible(static_cast<unsigned char*>(p) + k * kHugePageBytes), std::optional<bool>(true)) << k;
     }
-    ltm::io::PagesDeleter{}(p);
-    // A small one is malloc's, writable for its size, and also freed with std::free.
+    // The mapping is the allocation's own: freeing it unmaps it whole.
+    ltm::io::free_pages(p, bytes);
+    EXPECT_EQ(thp_eligible(p), std::nullopt) << "the pages are still mapped after free_pages";
+    // A small one is malloc's, writable for its size.
     void* q = ltm::io::allocate_pages(100);
     ASSERT_NE(q, nullptr);
     std::memset(q, 1, 100);
-    ltm::io::PagesDeleter{}(q);
+    ltm::io::free_pages(q, 100);
     void* z = ltm::io::allocate_pages(0);  // a zero-size request still gets a pointer to free
     ASSERT_NE(z, nullptr);
-    ltm::io::PagesDeleter{}(z);
+    ltm::io::free_pages(z, 0);
 }
 
 TEST(Pages, ScratchGrowsByAnEighthAndKeepsItsRoomForSmallerRequests) {

@@ -320,7 +320,8 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
         constexpr double kUnbudgeted = double(std::size_t(1) << 27);  // entries: 512 MiB per array
         const double cap = streaming ? static_cast<double>(opt.max_matrix_bytes) / 8.0 + per_wave : kUnbudgeted;
         const double most = std::min(branches * spp * static_cast<double>(items), cap);
-        // In huge pages (io/Pages.h): T's arrays are most of the fresh memory a render touches.
+        // In huge pages when large (io/Pages.h): T's arrays are most of the fresh memory a
+        // render touches. (Once streaming, the arrays are refilled without the advice.)
         io::reserve_in_huge_pages(held_indices, static_cast<size_t>(most));
         io::reserve_in_huge_pages(held_data, static_cast<size_t>(most));
     }
