@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
+#include <system_error>
 #include <utility>
 
 #include "io/TemporaryName.h"
@@ -148,12 +149,49 @@ void fsync_folder(const std::string& path) {
 }
 
 CommitGroup::~CommitGroup() {
+    stop_syncer(false);
     for (File& f : files_) discard(f);
 }
 
 void CommitGroup::add(File&& file) {
     const std::lock_guard<std::mutex> lock(mutex_);
     files_.push_back(std::move(file));
+    if (files_.size() == 2 && !syncer_.joinable()) {
+        // Without a thread (none can be made), commit() syncs the files itself.
+        try {
+            syncer_ = std::thread([this] { sync_loop(); });
+        } catch (const std::system_error&) {
+        }
+    }
+    wake_.notify_one();
+}
+
+// The syncer: fsyncs files_[next_sync_] onward as they are handed in, outside the lock (the file
+// stays open: only the syncer's stop, which joins it, lets anyone close it).
+void CommitGroup::sync_loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+        wake_.wait(lock, [&] { return stopping_ || next_sync_ < files_.size(); });
+        if (stopping_ && (!draining_ || next_sync_ == files_.size())) return;
+        const std::size_t k = next_sync_;
+        const int fd = files_[k].fd;
+        lock.unlock();
+        const int r = ::fsync(fd);
+        const int e = errno;
+        lock.lock();
+        files_[k].synced = r == 0 ? 1 : -e;  // files_ may have grown: indexed again under the lock
+        ++next_sync_;
+    }
+}
+
+void CommitGroup::stop_syncer(bool drain) noexcept {
+    {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        stopping_ = true;
+        draining_ = drain;
+    }
+    wake_.notify_one();
+    if (syncer_.joinable()) syncer_.join();
 }
 
 std::size_t CommitGroup::size() const {
@@ -169,6 +207,7 @@ void CommitGroup::discard(File& f) noexcept {
 }
 
 void CommitGroup::commit() {
+    stop_syncer(true);  // every file handed in is synced (or its failure recorded) after this
     std::vector<File> files;
     {
         const std::lock_guard<std::mutex> lock(mutex_);
@@ -188,7 +227,8 @@ void CommitGroup::commit() {
             throw std::runtime_error("cannot write " + f.kind + " '" + f.path + "': " + step + " the temporary file '" +
                                      f.tmp + "'" + after + " failed: " + errno_text(e));
         };
-        if (::fsync(f.fd) != 0) failed(errno, "syncing", "");
+        if (f.synced < 0) failed(-f.synced, "syncing", "");
+        if (f.synced == 0 && ::fsync(f.fd) != 0) failed(errno, "syncing", "");
         const int fd = f.fd;
         f.fd = -1;
         if (::close(fd) != 0) failed(errno, "closing", "");

@@ -24,9 +24,11 @@
 // approximately).
 #include <cstddef>
 #include <cstdint>
+#include <condition_variable>
 #include <mutex>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 namespace ltm::io {
@@ -120,10 +122,11 @@ private:
 // Committed alone, each file costs two fsyncs, its own and its folder's, and on ext4 each is a
 // journal commit and a flush of the disk's cache: the default scene's 21 outputs spent 39 ms of
 // thread time in 44 fsyncs (strace), half of the write stage. Committed into a group, a file's
-// writeback starts at once (sync_file_range) while the other files are computed, and the group's
-// commit() then fsyncs the files one after another (the first commits the journal for the data
-// of all of them, so the others find little left to do), renames each onto its path and syncs
-// each distinct folder once.
+// writeback starts at once (sync_file_range), and from the group's second file on a thread of the
+// group's fsyncs the files as they come in, while the writers compute the next ones (an fsync
+// mostly waits for the disk); commit() waits for that thread to have synced every file (one
+// journal commit often covers several), then renames each onto its path and syncs each distinct
+// folder once. A file committed alone (a group of one) is synced by commit() itself: no thread.
 //
 // The guarantees are AtomicFile's, for every file of the group, with group.commit() in the place
 // of the file's commit(): before it, no file of the group is at its path (every path holds what
@@ -152,11 +155,20 @@ private:
     struct File {
         int fd = -1;  // the temporary, open
         std::string tmp, path, kind;
+        int synced = 0;  // 1 once fsync'ed by the syncer, -errno if that failed, 0 not yet
     };
     void add(File&& file);
     static void discard(File& file) noexcept;
+    void sync_loop();
+    // Stops the syncer: at once (`drain` false: the group is discarded) or once it has synced
+    // every file handed in. Joins it.
+    void stop_syncer(bool drain) noexcept;
     mutable std::mutex mutex_;
+    std::condition_variable wake_;
     std::vector<File> files_;
+    std::thread syncer_;          // started by the second file
+    std::size_t next_sync_ = 0;   // files_[next_sync_] is the next the syncer takes
+    bool stopping_ = false, draining_ = false;
 };
 
 // Writes `bytes` to `path` atomically, with `kind` in error messages (an AtomicFile written and
