@@ -25,6 +25,9 @@
 
 #include "features/Features.h"
 #include "features/Plot.h"
+#include "io/AtomicFile.h"
+#include "io/Image.h"
+#include "io/LtmFile.h"
 
 using namespace ltm;
 
@@ -137,6 +140,46 @@ void BM_Previews(benchmark::State& state) {
         static_cast<double>(channels.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_Previews)->ArgName("tile")->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// BM_WriteFile writes one of a render's files from the synthetic T and its features, on one
+// thread, made durable as a render's are (io::CommitGroup): 0 features.exr, 1 features.npz,
+// 2 ltm.npz, 3 reference.exr (the means of every pixel), 4 one preview (BrightField). The CPU time
+// is the file's own work; the real time adds the fsync.
+void BM_WriteFile(benchmark::State& state) {
+    const Synthetic& s = synthetic();
+    const DisplayGrid display{kQ, kP, kWidth, kHeight};
+    const FeatureImages f = compute_features(s.T, kN, kM, display, FeatureOptions{}, &s.reference);
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("ltm-bench-files-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const int kind = static_cast<int>(state.range(0));
+    for (auto _ : state) {
+        io::CommitGroup group;
+        switch (kind) {
+            case 0: write_exr((dir / "features.exr").string(), kN, kM, f.channels, &group); break;
+            case 1: write_npz_channels((dir / "features.npz").string(), kN, kM, f.channels, &group); break;
+            case 2: {
+                NpzWriteOptions o;
+                o.group = &group;
+                write_ltm_npz((dir / "ltm.npz").string(), s.T, o);
+                break;
+            }
+            case 3:
+                write_exr((dir / "reference.exr").string(), kN, kM,
+                          {{"MeanX", s.reference.data(), s.reference.size() / 2, 2},
+                           {"MeanY", s.reference.data() + 1, s.reference.size() / 2, 2}},
+                          &group);
+                break;
+            default:
+                write_pseudo_colour_png((dir / "BrightField.png").string(), f.channels[0].second, kN, kM,
+                                        feature_title(f.channels[0].first), NAN, NAN, 400 / kN,
+                                        ImageExtent{kWidth, kHeight}, &group);
+        }
+        group.commit();
+    }
+    fs::remove_all(dir);
+}
+BENCHMARK(BM_WriteFile)->ArgName("file")->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
