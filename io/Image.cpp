@@ -104,27 +104,42 @@ void png_read_fn(png_structp png, png_bytep out, png_size_t n) {
 // stream (RFC 1950) of the rows, each row after its filter-type byte 0 (None: previews are flat
 // colour and noisy data cells, which the adaptive filters do not predict; unfiltered rows deflated
 // ~10 % smaller and ~35 % faster with libpng); IEND. Each chunk is its length, type, data and the
-// CRC-32 of type and data. The rows are deflated as one stream by igzip (io/Deflate.h's
-// ZlibStream) at kPngLevel, a row at a time.
+// CRC-32 of type and data. The rows are deflated by igzip (io/Deflate.h) at kPngLevel.
+//
+// A picture of up to kPngWholeBytes filtered bytes is laid out whole in a buffer the thread keeps
+// (io::thread_buffer) and deflated in one call (zlib_deflate): igzip's streaming deflate copies
+// every byte it is given into its history buffer first, which was a tenth of a preview's time
+// (perf, bench_features' BM_WriteFile/file:4). A larger picture is streamed a row at a time from
+// one line, so that its copy is never made (a 16-bit frame of a large camera).
+
 void write_png_file(const std::string& path, int width, int height, int bit_depth, int color_type, std::size_t rowbytes,
                     const std::function<void(int, std::uint8_t*)>& row, io::CommitGroup* group = nullptr) {
-    // The rows are streamed, each after its filter byte, from one line buffer: a copy of the whole
-    // picture with the filter bytes faulted in 3.5 MB per thread for the industrial scene's
-    // previews. The limit: deflate's stored blocks need 5 bytes per 64 KiB and zlib 6 bytes of
-    // header and Adler-32, but igzip's streaming deflate falls back to stored blocks only within
-    // one piece of input, and on random rows it was measured 0.065 % over the input: the room is
-    // n / 64 + 4 KiB over it, and costs nothing until written (io::ScratchBytes).
+    // The limit: deflate's stored blocks need 5 bytes per 64 KiB and zlib 6 bytes of header and
+    // Adler-32, but igzip's streaming deflate falls back to stored blocks only within one piece of
+    // input, and on random rows it was measured 0.065 % over the input: the room is n / 64 + 4 KiB
+    // over it, and costs nothing until written (io::ScratchBytes).
     const std::size_t n = (rowbytes + 1) * static_cast<std::size_t>(height);
+    const std::size_t limit = n + n / 64 + 4096;
     io::Deflated z;
     try {
-        io::ZlibStream stream(kPngLevel, n + n / 64 + 4096);
-        unsigned char* const line = io::thread_buffer(0, rowbytes + 1);
-        line[0] = 0;  // filter type None
-        for (int r = 0; r < height; ++r) {
-            row(r, line + 1);
-            if (!stream.add(line, rowbytes + 1, r + 1 == height)) break;
+        if (n <= kPngWholeBytes) {
+            unsigned char* const rows = io::thread_buffer(0, n);
+            for (int r = 0; r < height; ++r) {
+                unsigned char* const line = rows + static_cast<std::size_t>(r) * (rowbytes + 1);
+                line[0] = 0;  // filter type None
+                row(r, line + 1);
+            }
+            z = io::zlib_deflate(rows, n, kPngLevel, limit);
+        } else {
+            io::ZlibStream stream(kPngLevel, limit);
+            unsigned char* const line = io::thread_buffer(0, rowbytes + 1);
+            line[0] = 0;  // filter type None
+            for (int r = 0; r < height; ++r) {
+                row(r, line + 1);
+                if (!stream.add(line, rowbytes + 1, r + 1 == height)) break;
+            }
+            z = stream.result();
         }
-        z = stream.result();
     } catch (const std::exception& e) {
         throw std::runtime_error("cannot write PNG image '" + path + "': " + e.what());
     }

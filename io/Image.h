@@ -101,6 +101,9 @@ std::vector<float> pattern_values(const Image& img);
 // takes 0.12 s, for 9.8 MB instead of 8.6 (the default scene's: 45 -> 16 ms, 507 -> 539 kB);
 // igzip's level 1 is no faster and level 3 slower (one thread, best of 5 writes of the 17 pictures).
 inline constexpr int kPngLevel = 2;
+// A picture of up to this many bytes of rows (each after its filter byte) is deflated whole from
+// one buffer its thread keeps; a larger one is streamed a row at a time (io/Image.cpp says why).
+inline constexpr std::size_t kPngWholeBytes = std::size_t{32} << 20;
 void write_png(const std::string& path, const Image& img, io::CommitGroup* group = nullptr);
 // The same for code values as they are (png_code's); the same file as write_png of the Image
 // whose values are these codes / 255.

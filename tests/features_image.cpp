@@ -300,53 +300,58 @@ TEST_F(ImageTest, CodeValueImagesWriteTheFloatImagesFile) {
 // depth 8, colour type 2, methods 0), IDAT chunks (random codes do not compress: a 300 x 200 RGB
 // image needs several), IEND last and empty; every chunk's CRC-32 over its type and data; and the
 // IDAT data, joined, one zlib stream of the rows, each after filter type 0 (None: previews are not
-// filtered, see write_png).
+// filtered, see write_png). Both ways io/Image.cpp deflates the rows: whole from one buffer (up
+// to kPngWholeBytes of rows with their filter bytes) and streamed a row at a time (beyond).
 TEST_F(ImageTest, PngChunksAndTheirDataAreThePngSpecifications) {
-    const int w = 300, h = 200;
-    ltm::Image8 img(w, h, 3);
-    std::mt19937 rng(7);
-    for (auto& v : img.data) v = static_cast<std::uint8_t>(rng());
-    ltm::write_png(path("random.png"), img);
-    const std::string bytes = slurp(path("random.png"));
-    ASSERT_GE(bytes.size(), 8u);
-    EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
-    auto be32 = [&](std::size_t at) {
-        std::uint32_t v = 0;
-        for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
-        return v;
-    };
-    std::vector<std::string> types;
-    std::string idat;
-    std::size_t at = 8;
-    while (at + 12 <= bytes.size()) {
-        const std::uint32_t n = be32(at);
-        ASSERT_LE(at + 12 + n, bytes.size());
-        const std::string type = bytes.substr(at + 4, 4);
-        const auto* typed = reinterpret_cast<const Bytef*>(bytes.data() + at + 4);
-        EXPECT_EQ(be32(at + 8 + n), static_cast<std::uint32_t>(crc32(0L, typed, 4 + n))) << type << " at " << at;
-        if (type == "IHDR") {
-            ASSERT_EQ(n, 13u);
-            EXPECT_EQ(be32(at + 8), static_cast<std::uint32_t>(w));
-            EXPECT_EQ(be32(at + 12), static_cast<std::uint32_t>(h));
-            EXPECT_EQ(bytes.substr(at + 16, 5), std::string("\x08\x02\x00\x00\x00", 5));
+    for (const auto& [w, h] : {std::pair{300, 200}, std::pair{4000, 2800}}) {
+        SCOPED_TRACE(std::to_string(w) + " x " + std::to_string(h));
+        const std::size_t filtered = static_cast<std::size_t>(h) * (3 * static_cast<std::size_t>(w) + 1);
+        EXPECT_EQ(filtered > ltm::kPngWholeBytes, w > 300) << "the large image is streamed, the small one deflated whole";
+        ltm::Image8 img(w, h, 3);
+        std::mt19937 rng(7);
+        for (auto& v : img.data) v = static_cast<std::uint8_t>(rng());
+        ltm::write_png(path("random.png"), img);
+        const std::string bytes = slurp(path("random.png"));
+        ASSERT_GE(bytes.size(), 8u);
+        EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+        auto be32 = [&](std::size_t at) {
+            std::uint32_t v = 0;
+            for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
+            return v;
+        };
+        std::vector<std::string> types;
+        std::string idat;
+        std::size_t at = 8;
+        while (at + 12 <= bytes.size()) {
+            const std::uint32_t n = be32(at);
+            ASSERT_LE(at + 12 + n, bytes.size());
+            const std::string type = bytes.substr(at + 4, 4);
+            const auto* typed = reinterpret_cast<const Bytef*>(bytes.data() + at + 4);
+            EXPECT_EQ(be32(at + 8 + n), static_cast<std::uint32_t>(crc32(0L, typed, 4 + n))) << type << " at " << at;
+            if (type == "IHDR") {
+                ASSERT_EQ(n, 13u);
+                EXPECT_EQ(be32(at + 8), static_cast<std::uint32_t>(w));
+                EXPECT_EQ(be32(at + 12), static_cast<std::uint32_t>(h));
+                EXPECT_EQ(bytes.substr(at + 16, 5), std::string("\x08\x02\x00\x00\x00", 5));
+            }
+            if (type == "IDAT") idat += bytes.substr(at + 8, n);
+            types.push_back(type);
+            at += 12 + n;
         }
-        if (type == "IDAT") idat += bytes.substr(at + 8, n);
-        types.push_back(type);
-        at += 12 + n;
-    }
-    EXPECT_EQ(at, bytes.size());
-    ASSERT_GE(types.size(), 5u);
-    EXPECT_EQ(types.front(), "IHDR");
-    EXPECT_EQ(types.back(), "IEND");
-    EXPECT_EQ(std::count(types.begin(), types.end(), "IDAT"), static_cast<long>(types.size() - 2));
-    std::vector<unsigned char> rows(static_cast<std::size_t>(h) * (3 * w + 1));
-    uLongf got = static_cast<uLongf>(rows.size());
-    ASSERT_EQ(uncompress(rows.data(), &got, reinterpret_cast<const Bytef*>(idat.data()), static_cast<uLong>(idat.size())), Z_OK);
-    ASSERT_EQ(got, rows.size());
-    for (int r = 0; r < h; ++r) {
-        const unsigned char* row = rows.data() + static_cast<std::size_t>(r) * (3 * w + 1);
-        ASSERT_EQ(row[0], 0) << "row " << r << "'s filter type";
-        ASSERT_EQ(std::memcmp(row + 1, img.data.data() + static_cast<std::size_t>(r) * 3 * w, 3 * w), 0) << "row " << r;
+        EXPECT_EQ(at, bytes.size());
+        ASSERT_GE(types.size(), 5u);
+        EXPECT_EQ(types.front(), "IHDR");
+        EXPECT_EQ(types.back(), "IEND");
+        EXPECT_EQ(std::count(types.begin(), types.end(), "IDAT"), static_cast<long>(types.size() - 2));
+        std::vector<unsigned char> rows(static_cast<std::size_t>(h) * (3 * w + 1));
+        uLongf got = static_cast<uLongf>(rows.size());
+        ASSERT_EQ(uncompress(rows.data(), &got, reinterpret_cast<const Bytef*>(idat.data()), static_cast<uLong>(idat.size())), Z_OK);
+        ASSERT_EQ(got, rows.size());
+        for (int r = 0; r < h; ++r) {
+            const unsigned char* row = rows.data() + static_cast<std::size_t>(r) * (3 * w + 1);
+            ASSERT_EQ(row[0], 0) << "row " << r << "'s filter type";
+            ASSERT_EQ(std::memcmp(row + 1, img.data.data() + static_cast<std::size_t>(r) * 3 * w, 3 * w), 0) << "row " << r;
+        }
     }
 }
 
