@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -31,18 +32,19 @@ namespace {
 // What a thread keeps for its streams: igzip's working memory per level, the output, and the
 // stream's state (82 KB, too large for the stack of a thread pool's worker).
 struct ThreadDeflate {
-    std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
+    ScratchBytes level_buf[kIgzipMaxLevel + 1];  // in huge pages: see io/Pages.h
     ScratchBytes out;  // igzip writes it; only the pages it reaches are faulted in
     isal_zstream z;
     bool streaming = false;  // a ZlibStream holds z
 
-    // The working memory for `level`, zeroed: a stream must depend on its input alone, never on
-    // the thread's history (tests/app_dataset.cpp compares datasets made on one thread and on
-    // two). It keeps the previous stream's tables, which igzip does not promise to ignore.
-    std::vector<std::uint8_t>& working_memory(int level) {
-        std::vector<std::uint8_t>& buf = level_buf[level >= kIgzipMinLevel && level <= kIgzipMaxLevel ? level : 0];
-        if (buf.empty()) buf.resize(igzip_level_buffer_size(level));
-        else std::fill(buf.begin(), buf.end(), std::uint8_t{0});
+    // The working memory for `level` (igzip_level_buffer_size(level) bytes), zeroed: a stream
+    // must depend on its input alone, never on the thread's history (tests/app_dataset.cpp
+    // compares datasets made on one thread and on two). It keeps the previous stream's tables,
+    // which igzip does not promise to ignore.
+    std::uint8_t* working_memory(int level) {
+        const std::size_t n = igzip_level_buffer_size(level);  // checks the level
+        std::uint8_t* const buf = level_buf[level].get(n);
+        std::memset(buf, 0, n);
         return buf;
     }
 };
@@ -70,14 +72,14 @@ ZlibStream::ZlibStream(int level, std::size_t limit) : state_(nullptr) {
     s->room = limit == 0 ? 0 : std::min(limit - 1, kMaxOut);
     s->fits = limit != 0;
     s->done = limit == 0;  // nothing fits: finished, with size 0
-    std::vector<std::uint8_t>& buf = t.working_memory(level);
+    std::uint8_t* const buf = t.working_memory(level);
     s->out = t.out.get(std::max<std::size_t>(s->room, 1));
     // Zeroed first: isal_deflate_init leaves part of the state as it was (see zlib_deflate).
     t.z = isal_zstream{};
     isal_deflate_init(&t.z);
     t.z.level = static_cast<std::uint32_t>(level);
-    t.z.level_buf = buf.data();
-    t.z.level_buf_size = static_cast<std::uint32_t>(buf.size());
+    t.z.level_buf = buf;
+    t.z.level_buf_size = static_cast<std::uint32_t>(igzip_level_buffer_size(level));
     t.z.gzip_flag = IGZIP_ZLIB;
     t.z.flush = NO_FLUSH;
     t.z.next_out = s->out;
@@ -138,7 +140,7 @@ Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::si
     if (limit == 0) return {};
     ThreadDeflate& t = thread_deflate();
     if (t.streaming) throw std::logic_error("zlib_deflate: called while the thread's ZlibStream is open");
-    std::vector<std::uint8_t>& buf = t.working_memory(level);
+    std::uint8_t* const buf = t.working_memory(level);
     const std::size_t room = std::min(limit - 1, kMax);
     unsigned char* const out_bytes = t.out.get(room);
     // Zeroed first: isal_deflate_stateless_init leaves part of the state as it was, and stack
@@ -146,8 +148,8 @@ Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::si
     isal_zstream z{};
     isal_deflate_stateless_init(&z);
     z.level = static_cast<std::uint32_t>(level);
-    z.level_buf = buf.data();
-    z.level_buf_size = static_cast<std::uint32_t>(buf.size());
+    z.level_buf = buf;
+    z.level_buf_size = static_cast<std::uint32_t>(igzip_level_buffer_size(level));
     z.gzip_flag = IGZIP_ZLIB;
     z.end_of_stream = 1;
     z.flush = NO_FLUSH;

@@ -150,8 +150,9 @@ struct ArchiveSink {
 struct Deflater {
     int level = 1;                          // igzip's level, 1..3 (NpzWriteOptions::compression_level)
     isal_zstream z{};
-    std::vector<std::uint8_t> level_buf;    // igzip's working memory for `level` (its default size)
-    std::vector<unsigned char> out;         // deflated bytes not yet handed to libzip: [head, tail)
+    ScratchBytes level_buf;                 // igzip's working memory for `level`: level_size bytes
+    std::size_t level_size = 0;             // (its default size)
+    ScratchBytes out;                       // deflated bytes not yet handed to libzip: [head, tail)
     std::size_t head = 0, tail = 0;
     std::uint32_t crc = 0;                  // CRC-32 of the input so far (ZIP's, as zlib's crc32)
 
@@ -163,13 +164,14 @@ struct Deflater {
     // fresh ones for every archive faulted half a megabyte of new pages in each (two archives a
     // render, and tens of thousands in a dataset). They are borrowed while the deflater lives and
     // given back after; an archive begun on a thread while another is open there gets fresh ones.
-    explicit Deflater(int lvl) : level(lvl) {
-        const std::size_t working = igzip_level_buffer_size(lvl);  // checks lvl: 1..3
+    // Both are io::ScratchBytes: in huge pages, since a first archive's 0.6 MB of fresh small
+    // pages cost about 1.5 ms of faults (a render writes two, on two threads).
+    explicit Deflater(int lvl) : level(lvl), level_size(igzip_level_buffer_size(lvl)) {  // checks lvl: 1..3
         Kept& k = kept();
         level_buf.swap(k.level_buf[lvl]);
         out.swap(k.out);
-        level_buf.resize(working);  // cleared by start() for each entry
-        out.resize(kPiece);
+        level_buf.get(level_size);  // cleared by start() for each entry
+        out.get(kPiece);
     }
     ~Deflater() {
         Kept& k = kept();
@@ -183,11 +185,11 @@ struct Deflater {
     // make an entry's bytes depend on the entries before it (io/Deflate.cpp does the same).
     void start() {
         z = isal_zstream{};
-        std::fill(level_buf.begin(), level_buf.end(), std::uint8_t{0});
+        std::memset(level_buf.get(level_size), 0, level_size);
         isal_deflate_init(&z);
         z.level = static_cast<std::uint32_t>(level);
-        z.level_buf = level_buf.data();
-        z.level_buf_size = static_cast<std::uint32_t>(level_buf.size());
+        z.level_buf = level_buf.get(level_size);
+        z.level_buf_size = static_cast<std::uint32_t>(level_size);
         z.gzip_flag = IGZIP_DEFLATE;  // raw deflate, as a ZIP entry holds it
         z.flush = NO_FLUSH;
         head = tail = 0;
@@ -197,8 +199,8 @@ struct Deflater {
 
 private:
     struct Kept {
-        std::vector<std::uint8_t> level_buf[kIgzipMaxLevel + 1];
-        std::vector<unsigned char> out;
+        ScratchBytes level_buf[kIgzipMaxLevel + 1];
+        ScratchBytes out;
     };
     static Kept& kept() {
         thread_local Kept k;
@@ -305,8 +307,8 @@ struct EntrySource {
                 if (d.z.internal_state.state == ZSTATE_END) break;
                 // Refill `out`: deflate until it is full or the stream has ended.
                 d.head = d.tail = 0;
-                d.z.next_out = d.out.data();
-                d.z.avail_out = static_cast<std::uint32_t>(d.out.size());
+                d.z.next_out = d.out.get(Deflater::kPiece);
+                d.z.avail_out = static_cast<std::uint32_t>(Deflater::kPiece);
                 while (d.z.avail_out > 0 && d.z.internal_state.state != ZSTATE_END) {
                     if (d.z.avail_in == 0 && !d.z.end_of_stream) {
                         const auto [p, k] = next_piece();
@@ -318,10 +320,10 @@ struct EntrySource {
                     const int r = isal_deflate(&d.z);
                     if (r != COMP_OK) throw std::runtime_error("ISA-L's deflate failed (code " + std::to_string(r) + ")");
                 }
-                d.tail = d.out.size() - d.z.avail_out;
+                d.tail = Deflater::kPiece - d.z.avail_out;
             }
             const std::size_t m = std::min(n - done, d.tail - d.head);
-            std::memcpy(dst + done, d.out.data() + d.head, m);
+            std::memcpy(dst + done, d.out.get(Deflater::kPiece) + d.head, m);
             d.head += m;
             done += m;
         }

@@ -24,7 +24,7 @@ void advise_huge_pages(const void* p, std::size_t bytes) noexcept {
 }
 
 namespace {
-constexpr std::size_t kSmall = std::size_t(1) << 20;  // below this, malloc's own placement
+constexpr std::size_t kSmall = std::size_t(256) << 10;  // below this, malloc's own placement (io/Pages.h)
 std::size_t whole_huge_pages(std::size_t bytes) { return (bytes + kHugePageBytes - 1) & ~(kHugePageBytes - 1); }
 }  // namespace
 

@@ -174,6 +174,14 @@ TEST(Pages, LargeAllocationsAreWholeAdvisedHugePages) {
     // The mapping is the allocation's own: freeing it unmaps it whole.
     ltm::io::free_pages(p, bytes);
     EXPECT_EQ(thp_eligible(p), std::nullopt) << "the pages are still mapped after free_pages";
+    // From 256 KiB up a buffer is a mapping of its own, one whole huge page here (igzip's working
+    // memory, 324 KB, and a preview's rows are kept per thread in such buffers).
+    void* m = ltm::io::allocate_pages(256 << 10);
+    ASSERT_NE(m, nullptr);
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(m) % kHugePageBytes, 0u);
+    std::memset(m, 0x5a, kHugePageBytes);  // rounded up to the whole huge page, all of it writable
+    ltm::io::free_pages(m, 256 << 10);
+    EXPECT_EQ(thp_eligible(m), std::nullopt) << "the pages are still mapped after free_pages";
     // A small one is malloc's, writable for its size.
     void* q = ltm::io::allocate_pages(100);
     ASSERT_NE(q, nullptr);
