@@ -829,21 +829,17 @@ void paint_cells(Image& img, const std::vector<float>& values, int width, int he
 // pixel_scale times across, and the finished pixel row copied pixel_scale - 1 times down. Cell by
 // cell through fill_rect this was half of the industrial scene's preview time (perf: 17 previews
 // of 1000 x 1000 cells, one fill_rect and one viridis a pixel).
-void paint_cells(SurfacePicture& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
-                 int pixel_scale) {
-    if (L.image_x < 0 || L.image_y < 0 || L.image_x + width * pixel_scale > img.width ||
-        L.image_y + height * pixel_scale > img.height)
-        throw std::logic_error("pseudo_colour: the image block lies outside its picture");
-    // viridis and png_code inlined, the same arithmetic: t clamped, s = 255 t, entry i = min(floor
-    // s, 254), f = s - i, each channel float(a + (b - a) f) of entries i and i + 1 in double, then
-    // rounded to its code. (viridis returns entry i itself at f = 0 and entry i + 1 at f = 1: the
-    // formula gives the same floats there, since b - a and a + (b - a) are exact in double for
-    // floats in [0, 1].) NaN is kNanColour.
-    struct Entry {
-        double a[3], d[3];
-    };
-    static const std::array<Entry, 255> entries = [] {
-        std::array<Entry, 255> e{};
+// viridis and png_code inlined, the same arithmetic, as one pixel word (pixel_word): t clamped,
+// s = 255 t, entry i = min(floor s, 254), f = s - i, each channel float(a + (b - a) f) of entries
+// i and i + 1 in double, then rounded to its code. (viridis returns entry i itself at f = 0 and
+// entry i + 1 at f = 1: the formula gives the same floats there, since b - a and a + (b - a) are
+// exact in double for floats in [0, 1].) t is not NaN.
+struct ViridisEntry {
+    double a[3], d[3];
+};
+const std::array<ViridisEntry, 255>& viridis_entries() {
+    static const std::array<ViridisEntry, 255> entries = [] {
+        std::array<ViridisEntry, 255> e{};
         for (std::size_t i = 0; i < 255; ++i)
             for (std::size_t k = 0; k < 3; ++k) {
                 e[i].a[k] = kViridis[i][k];
@@ -851,34 +847,88 @@ void paint_cells(SurfacePicture& img, const std::vector<float>& values, int widt
             }
         return e;
     }();
-    const std::uint8_t nan_code[3] = {png_code(kNanColour[0]), png_code(kNanColour[1]), png_code(kNanColour[2])};
-    const auto codes_of = [&](double t, std::uint8_t* code) {
-        if (std::isnan(t)) {
-            std::memcpy(code, nan_code, 3);
-            return;
+    return entries;
+}
+int viridis_entry(double t) { return std::min(static_cast<int>(255.0 * t), 254); }  // t in [0, 1]
+std::uint32_t viridis_word(double t) {
+    t = std::clamp(t, 0.0, 1.0);
+    const double s = 255.0 * t;
+    const int i = std::min(static_cast<int>(s), 254);
+    const double f = s - i;
+    const ViridisEntry& e = viridis_entries()[static_cast<std::size_t>(i)];
+    std::uint8_t code[3];
+    for (int k = 0; k < 3; ++k) code[k] = png_code(static_cast<float>(e.a[k] + e.d[k] * f));
+    return pixel_word(code);
+}
+
+// viridis_word through a table of K = 2^14 buckets of t, for pictures of kPreviewTableCells cells
+// or more (the industrial scene's previews: 10^6 cells each, whose words were half of their time;
+// building the table costs 2 (K + 1) words, a third of a millisecond, once per process).
+//
+// Why it is exact: bucket b holds every t in [b / K, (b + 1) / K) (t K is exact, K being a power
+// of two, so b = floor(t K)), and each step of viridis_word is monotone in t while the entry i
+// stays the same: s = 255 t and floor are, f = s - i is, d f and a + d f are (rounding keeps order,
+// increasing for d >= 0, decreasing for d < 0), and so are the float conversion and png_code. So
+// when both ends of a bucket, b / K and the largest double below (b + 1) / K, have the same entry
+// and the same codes, every t between has them: the bucket holds that word. Otherwise (921 of the
+// 16384 buckets, where a code or the entry changes) it holds kExact and the cell is computed.
+// t = 1 has a bucket of its own. tests/features_plot.cpp checks both ends of every bucket.
+class ViridisTable {
+public:
+    static constexpr int kBuckets = 1 << 14;
+    static constexpr std::uint32_t kExact = 0xFFFFFFFFu;  // pixel words have a zero top byte
+
+    ViridisTable() {
+        for (int b = 0; b < kBuckets; ++b) {
+            const double t0 = static_cast<double>(b) / kBuckets;
+            const double t1 = std::nextafter(static_cast<double>(b + 1) / kBuckets, 0.0);
+            const std::uint32_t w0 = viridis_word(t0), w1 = viridis_word(t1);
+            words_[static_cast<std::size_t>(b)] = viridis_entry(t0) == viridis_entry(t1) && w0 == w1 ? w0 : kExact;
         }
-        t = std::clamp(t, 0.0, 1.0);
-        const double s = 255.0 * t;
-        const int i = std::min(static_cast<int>(s), 254);
-        const double f = s - i;
-        const Entry& e = entries[static_cast<std::size_t>(i)];
-        for (int k = 0; k < 3; ++k) code[k] = png_code(static_cast<float>(e.a[k] + e.d[k] * f));
-    };
+        words_[kBuckets] = viridis_word(1.0);
+    }
+    // viridis_word(t) for t in [0, 1].
+    std::uint32_t word(double t) const {
+        const std::uint32_t w = words_[static_cast<std::size_t>(t * kBuckets)];
+        return w != kExact ? w : viridis_word(t);
+    }
+
+private:
+    std::array<std::uint32_t, kBuckets + 1> words_;
+};
+
+// The same cells in code values, the same codes as fill_rect's, computed row by row: a cell's code
+// once (and once for a run of equal values: feature maps hold long runs of counts and zeros), put
+// pixel_scale times across, and the finished pixel row copied pixel_scale - 1 times down. Cell by
+// cell through fill_rect this was half of the industrial scene's preview time (perf: 17 previews
+// of 1000 x 1000 cells, one fill_rect and one viridis a pixel).
+void paint_cells(SurfacePicture& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
+                 int pixel_scale) {
+    if (L.image_x < 0 || L.image_y < 0 || L.image_x + width * pixel_scale > img.width ||
+        L.image_y + height * pixel_scale > img.height)
+        throw std::logic_error("pseudo_colour: the image block lies outside its picture");
+    const std::uint8_t nan_code[3] = {png_code(kNanColour[0]), png_code(kNanColour[1]), png_code(kNanColour[2])};
+    const std::uint32_t nan_word = pixel_word(nan_code);
+    const ViridisTable* table = nullptr;
+    if (static_cast<std::int64_t>(width) * height >= kPreviewTableCells) {
+        static const ViridisTable shared;
+        table = &shared;
+    }
     const double range = L.hi - L.lo;
+    const auto word_of = [&](double t) {
+        if (std::isnan(t)) return nan_word;  // NaN is kNanColour
+        return table ? table->word(std::clamp(t, 0.0, 1.0)) : viridis_word(t);
+    };
     const std::size_t row_bytes = sizeof(std::uint32_t) * static_cast<std::size_t>(width) * pixel_scale;
     for (int m = 0; m < height; ++m) {
         std::uint32_t* const row = img.pixels + static_cast<std::size_t>(L.image_y + m * pixel_scale) * img.stride +
                                    static_cast<std::size_t>(L.image_x);
         const float* const v = values.data() + static_cast<std::size_t>(m) * static_cast<std::size_t>(width);
-        std::uint8_t code[3] = {};
         std::uint32_t word = 0;
         std::uint32_t* out = row;
         for (int n = 0; n < width; ++n) {
             // Equal bits, equal colour (NaN included, whose colour does not depend on its bits).
-            if (n == 0 || std::memcmp(&v[n], &v[n - 1], sizeof(float)) != 0) {
-                codes_of((v[n] - L.lo) / range, code);
-                word = pixel_word(code);
-            }
+            if (n == 0 || std::memcmp(&v[n], &v[n - 1], sizeof(float)) != 0) word = word_of((v[n] - L.lo) / range);
             for (int s = 0; s < pixel_scale; ++s) *out++ = word;
         }
         for (int s = 1; s < pixel_scale; ++s) std::memcpy(row + static_cast<std::size_t>(s) * img.stride, row, row_bytes);

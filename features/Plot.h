@@ -184,7 +184,10 @@ Image pseudo_colour(const std::vector<float>& values, int width, int height, con
 
 // pseudo_colour written as an 8-bit RGB PNG (write_png: atomic): the same drawing in code values
 // (Image8), so the file is the one write_png(pseudo_colour(...)) writes, without the float picture.
-// With `group`, committed into it (io/AtomicFile.h's CommitGroup).
+// With `group`, committed into it (io/AtomicFile.h's CommitGroup). From kPreviewTableCells cells on,
+// the cells' colours come from a table of exact colours by bucket of the value (features/Plot.cpp
+// says why it gives the same codes).
+inline constexpr long long kPreviewTableCells = 1 << 17;
 void write_pseudo_colour_png(const std::string& path, const std::vector<float>& values, int width, int height,
                              const std::string& title, double lo, double hi, int pixel_scale,
                              const ImageExtent& extent = {}, io::CommitGroup* group = nullptr);

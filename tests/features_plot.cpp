@@ -823,6 +823,36 @@ TEST(PseudoColourPng, EveryEntryOfTheMapAndBetweenAsViridisGivesThem) {
     fs::remove_all(dir);
 }
 
+// A picture of kPreviewTableCells cells takes its colours from the table of buckets
+// (features/Plot.cpp): every value of [0, 1] must still get viridis()'s codes. The values: both
+// ends of every bucket of 2^-14 (b / 2^14 and the float just below (b + 1) / 2^14, where a
+// bucket's word is decided), 1, values beyond both ends, NaN, infinities, the rest uniform.
+TEST(PseudoColourPng, LargePicturesGiveViridisCodesThroughTheTable) {
+    const fs::path dir = fs::temp_directory_path() / ("ltm_plot_table_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string file = (dir / "table.png").string();
+    const int w = 512, h = 256;
+    ASSERT_GE(static_cast<long long>(w) * h, ltm::kPreviewTableCells);
+    std::vector<float> v;
+    constexpr int kBuckets = 1 << 14;
+    for (int b = 0; b < kBuckets; ++b) {
+        v.push_back(static_cast<float>(b) / kBuckets);
+        v.push_back(std::nextafter(static_cast<float>(b + 1) / kBuckets, 0.0f));
+    }
+    for (const float x : {1.0f, -0.5f, 1.5f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity()})
+        v.push_back(x);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    while (v.size() < static_cast<std::size_t>(w) * h) v.push_back(unit(rng));
+    ltm::write_pseudo_colour_png(file, v, w, h, "", 0.0, 1.0, 1, {});
+    const Image back = ltm::read_image(file);
+    const Image expected = ltm::pseudo_colour(v, w, h, "", 0.0, 1.0, 1, {});
+    ASSERT_EQ(back.data.size(), expected.data.size());
+    for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
+    fs::remove_all(dir);
+}
+
 namespace {
 
 // A line plot is kLinePlotWidth x kLinePlotHeight, draws its series in their colours (the point
