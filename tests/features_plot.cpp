@@ -804,23 +804,34 @@ TEST(PseudoColourPng, ReadableAndTheSameCodes) {
     fs::remove_all(dir);
 }
 
+namespace {
+
+// Writes the preview of v (w x h cells over [lo, hi], no title or axes, pixel scale 1) into a
+// fresh folder named after `tag` and expects its PNG to hold pseudo_colour's codes, pixel for pixel.
+void expect_preview_codes_are_pseudo_colours(const std::vector<float>& v, int w, int h, double lo, double hi,
+                                             const std::string& tag) {
+    const fs::path dir = fs::temp_directory_path() / ("ltm_plot_" + tag + "_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string file = (dir / (tag + ".png")).string();
+    ltm::write_pseudo_colour_png(file, v, w, h, "", lo, hi, 1, {});
+    const Image back = ltm::read_image(file);
+    const Image expected = ltm::pseudo_colour(v, w, h, "", lo, hi, 1, {});
+    ASSERT_EQ(back.data.size(), expected.data.size());
+    for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
+    fs::remove_all(dir);
+}
+
+}  // namespace
+
 // Over [0, 255] the cells' colours land on every entry of the map (whole values: f = 0, and
 // f = 1 at the top), halfway between entries, and just off them: the PNG path's inlined viridis
 // must give the codes of viridis() itself, which returns the entries as they are there.
 TEST(PseudoColourPng, EveryEntryOfTheMapAndBetweenAsViridisGivesThem) {
-    const fs::path dir = fs::temp_directory_path() / ("ltm_plot_entries_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    const std::string file = (dir / "entries.png").string();
     std::vector<float> v;
     for (int k = 0; k < 256; ++k)
         for (const float d : {0.0f, 0.5f, 1e-3f, -1e-3f}) v.push_back(static_cast<float>(k) + d);
     const int w = 64, h = static_cast<int>(v.size()) / w;
-    ltm::write_pseudo_colour_png(file, v, w, h, "", 0.0, 255.0, 1, {});
-    const Image back = ltm::read_image(file);
-    const Image expected = ltm::pseudo_colour(v, w, h, "", 0.0, 255.0, 1, {});
-    ASSERT_EQ(back.data.size(), expected.data.size());
-    for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
-    fs::remove_all(dir);
+    expect_preview_codes_are_pseudo_colours(v, w, h, 0.0, 255.0, "entries");
 }
 
 // A picture of kPreviewTableCells cells takes its colours from the table of buckets
@@ -828,9 +839,6 @@ TEST(PseudoColourPng, EveryEntryOfTheMapAndBetweenAsViridisGivesThem) {
 // ends of every bucket of 2^-14 (b / 2^14 and the float just below (b + 1) / 2^14, where a
 // bucket's word is decided), 1, values beyond both ends, NaN, infinities, the rest uniform.
 TEST(PseudoColourPng, LargePicturesGiveViridisCodesThroughTheTable) {
-    const fs::path dir = fs::temp_directory_path() / ("ltm_plot_table_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    const std::string file = (dir / "table.png").string();
     const int w = 512, h = 256;
     ASSERT_GE(static_cast<long long>(w) * h, ltm::kPreviewTableCells);
     std::vector<float> v;
@@ -845,12 +853,7 @@ TEST(PseudoColourPng, LargePicturesGiveViridisCodesThroughTheTable) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> unit(0.0f, 1.0f);
     while (v.size() < static_cast<std::size_t>(w) * h) v.push_back(unit(rng));
-    ltm::write_pseudo_colour_png(file, v, w, h, "", 0.0, 1.0, 1, {});
-    const Image back = ltm::read_image(file);
-    const Image expected = ltm::pseudo_colour(v, w, h, "", 0.0, 1.0, 1, {});
-    ASSERT_EQ(back.data.size(), expected.data.size());
-    for (std::size_t i = 0; i < back.data.size(); ++i) ASSERT_EQ(code(back.data[i]), code(expected.data[i])) << i;
-    fs::remove_all(dir);
+    expect_preview_codes_are_pseudo_colours(v, w, h, 0.0, 1.0, "table");
 }
 
 namespace {
