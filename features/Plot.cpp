@@ -853,7 +853,7 @@ int viridis_entry(double t) { return std::min(static_cast<int>(255.0 * t), 254);
 std::uint32_t viridis_word(double t) {
     t = std::clamp(t, 0.0, 1.0);
     const double s = 255.0 * t;
-    const int i = std::min(static_cast<int>(s), 254);
+    const int i = viridis_entry(t);
     const double f = s - i;
     const ViridisEntry& e = viridis_entries()[static_cast<std::size_t>(i)];
     std::uint8_t code[3];
