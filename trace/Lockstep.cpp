@@ -202,7 +202,8 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
 void Tracer::lanes_mesh_only_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h,
                                   PathStats* stats) const {
     // propagate -> straight_step -> straight_hit -> mesh_only_hit with the candidate, lane by
-    // lane: mesh-only media are straight (the constructor refuses others) and never escaped.
+    // lane: mesh-only media are straight (the constructor refuses others), and the escaped lanes
+    // (mesh_clear_ahead) never reach a query.
     for (int j = 0; j < m; ++j) {
         const int i = ids[j];
         Hit& hh = h[i];
@@ -315,6 +316,7 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         s.skip = hh.triangle;
         s.skip_prim = hh.prim;
         if (hh.triangle) s.skip_until = a.skip_until[j];
+        if (mesh_only) s.escaped = mesh_clear_ahead(s);  // as interact's spawn
         live[i] = true;
     }
 }

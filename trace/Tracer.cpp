@@ -172,10 +172,15 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
             user_patches_ = ellipsoids;
             embree_ = std::make_unique<EmbreeScene>(&tri_mesh_, &user_patches_, options_.robust);
             break;
-        case Representation::MeshOnly:
+        case Representation::MeshOnly: {
             tri_mesh_ = solid.mesh;
             embree_ = std::make_unique<EmbreeScene>(&tri_mesh_, nullptr, options_.robust);
+            TriMesh as_embree = tri_mesh_;  // EmbreeScene's RTC_FORMAT_FLOAT3 vertices
+            for (Vec3& v : as_embree.vertices)
+                v = {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
+            clear_planes_ = supporting_planes(as_embree);
             break;
+        }
     }
     packets_ = options_.representation != Representation::Analytic && user_patches_.size() <= kLinearScanLimit &&
                embree_->packets_supported();
@@ -206,7 +211,7 @@ Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
                        into.propagation == Propagation::Straight;
             // Leaving a convex object through its own face into the air: nothing of it can be met
             // again (State::escaped; interact reads this too). Not for the mesh, whose
-            // tessellation is not exactly convex (docs/benchmarks.md).
+            // tessellation is not exactly convex: its rule is per face (mesh_clear_ahead).
             f.escapes = convex_ && options_.representation != Representation::MeshOnly && sf.defect < 0 &&
                         from == Medium::Glass && f.to == Medium::Air;
         }
@@ -783,6 +788,7 @@ bool Tracer::interact(State& st, const Hit& h, Rng* rng, PathStats& stats, Princ
             s.skip_until = (trace_tol::kSkipChords * e + trace_tol::kSkipFloatUlps * kFloatUlp * scale_) /
                            std::max(std::fabs(dot(nd, nf)), trace_tol::kCandidateMinCos);
         }
+        if (!clear_planes_.empty()) s.escaped = mesh_clear_ahead(s);  // mesh-only's escape rule
         return true;
     };
     const int depth = st.depth;

@@ -34,6 +34,7 @@
 
 #include "defects/SolidBuilder.h"
 #include "defects/ToolShape.h"
+#include "geometry/Support.h"
 #include "scene/Scene.h"
 #include "trace/Camera.h"
 #include "trace/EmbreeScene.h"
@@ -216,6 +217,8 @@ private:
     Hit mesh_only_hit(const State& st, PathStats& stats, const Candidate* first) const;
     // mesh_only_hit's record of a triangle hit c of the ray (o, d), written into a reset h.
     void mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const;
+    // Mesh-only: the ray st just spawned off a supporting face meets no triangle (TracerState.h).
+    bool mesh_clear_ahead(const State& st) const;
     // Whether a packet's triangle candidate c of the ray (o, d) is what the full single-ray query
     // returns: no ellipsoid patch (which the packet does not see) can lie before it.
     bool packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const;
@@ -329,6 +332,9 @@ private:
     std::vector<int> tag_cutter_;  // per surface tag: its cutter's index in cutters_, or -1
     TriMesh tri_mesh_;                    // the triangles Embree sees (Refined, MeshOnly)
     std::vector<Vec3> face_normals_;
+    // Mesh-only: each face's supporting plane over the triangles as Embree holds them (float
+    // vertices; geometry/Support.h), empty for the other representations.
+    std::vector<SupportPlane> clear_planes_;
     std::unique_ptr<EmbreeScene> embree_;
     double scale_ = 1;
     bool convex_ = false;  // the object is a convex body (Lens::is_convex)

@@ -99,6 +99,20 @@ inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candida
     h.offset = trace_tol::kMeshOnlyOffsetUlps * trace_tol::kFloatUlp * mag;
 }
 
+// The mesh-only escape rule: a ray spawned off a supporting face, beyond its plane and not heading
+// back (clears_mesh), meets no triangle, so the query's answer is known: nothing. The test is
+// made on what Embree would see, the float-rounded ray against the float vertices the planes were
+// built from (the constructor), so it is exact for that query, not an approximation of it. The
+// convex objects' analytic rule (LaneFace::escapes) cannot serve here: the tessellation of a
+// convex object is not exactly convex (4 % of the paper lens's faces have a vertex up to 0.8 um
+// beyond their plane; docs/benchmarks.md), and those faces keep their query.
+inline bool Tracer::mesh_clear_ahead(const State& st) const {
+    if (!st.skip || clear_planes_.empty()) return false;
+    const auto f = [](double x) { return static_cast<double>(static_cast<float>(x)); };
+    const Vec3 o{f(st.o.x), f(st.o.y), f(st.o.z)}, d{f(st.d.x), f(st.d.y), f(st.d.z)};
+    return clears_mesh(clear_planes_[st.skip_prim], o, d);
+}
+
 // Where an ended branch lands on the display (weight 0 or off the display: pixel -1), written
 // into r, a PathResult as constructed (the caller's emplace_back: written where it stays).
 inline void Tracer::branch_result(const State& st, PathStats& stats, PathResult& r) const {
