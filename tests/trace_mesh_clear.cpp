@@ -31,15 +31,6 @@ display: {resolution: [40, 40], size: [90.0, 90.0], z: 55.0}
 seed: 3
 )";
 
-const char* kScratch = R"(
-object: {type: window, thickness: 5.0, diameter: 20.0, ior: 1.5}
-defects:
-  - {type: scratch, surface: front, profile: V, width: 0.4, depth: 0.2, start: [-4.0, -1.0], end: [4.0, 1.5]}
-camera: {resolution: [10, 10], size: [10.0, 10.0], numerical_aperture: 0.05, samples_per_pixel: 24}
-display: {resolution: [30, 30], size: [40.0, 40.0], z: 30.0}
-seed: 4
-)";
-
 struct Tally {
     long segments = 0, escaped = 0, embree_hits = 0;
 };
@@ -74,7 +65,7 @@ Tally check(const Built& b, bool robust) {
 }
 
 TEST(MeshClear, EveryEscapedSegmentIsOneEmbreeFindsNothingOn) {
-    for (const char* yaml : {kLens, kScratch}) {
+    for (const char* yaml : {kLens, test::kScratchedWindow}) {
         const Built b = build(yaml);
         for (const bool robust : {true, false}) {
             SCOPED_TRACE(std::string(yaml == kLens ? "lens" : "scratch") + (robust ? " robust" : " fast"));

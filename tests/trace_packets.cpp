@@ -36,17 +36,6 @@ display: {resolution: [40, 40], size: [90.0, 90.0], z: 55.0}
 seed: 9
 )";
 
-// A window with a V scratch on its front face: the glass is a Boolean result, its first segments
-// meet the scratch's walls.
-const char* kScratch = R"(
-object: {type: window, thickness: 5.0, diameter: 20.0, ior: 1.5}
-defects:
-  - {type: scratch, surface: front, profile: V, width: 0.4, depth: 0.2, start: [-4.0, -1.0], end: [4.0, 1.5]}
-camera: {resolution: [8, 8], size: [10.0, 10.0], numerical_aperture: 0.02, samples_per_pixel: 16}
-display: {resolution: [30, 30], size: [40.0, 40.0], z: 30.0}
-seed: 4
-)";
-
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // Every pixel's samples through sample_packet in packets of `size`, against sample_paths one by
@@ -181,7 +170,7 @@ TEST(Packets, SplitEstimatorAndBooleanGlassMatchToo) {
     const Tracer split = make(lens, Representation::Refined);
     EXPECT_FALSE(split.lockstep());  // a split sample's branches go one after another
     expect_packets_match(split, Tracer::kPacket);
-    const Built scratch = build(kScratch);
+    const Built scratch = build(test::kScratchedWindow);
     for (auto r : {Representation::Refined, Representation::MeshOnly}) {
         SCOPED_TRACE(to_string(r));
         expect_packets_match(make(scratch, r), Tracer::kPacket);
