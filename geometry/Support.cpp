@@ -3,12 +3,13 @@
 #include "geometry/Support.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <thread>
 
 namespace ltm {
 
@@ -112,8 +113,7 @@ std::vector<SupportPlane> supporting_planes(const TriMesh& mesh) {
     for (const Vec3& p : v) box.extend(p);
     const double diag = v.empty() ? 0.0 : length(box.hi - box.lo);
     std::vector<SupportPlane> out(mesh.num_triangles());
-    // Faces are independent: contiguous ranges on every core, each writing its own entries (the
-    // result does not depend on the split).
+    // Faces are independent: each range writes its own entries.
     const auto range = [&](size_t begin, size_t end) {
         for (size_t f = begin; f < end; ++f) {
             const auto& t = mesh.triangles[f];
@@ -143,12 +143,10 @@ std::vector<SupportPlane> supporting_planes(const TriMesh& mesh) {
             }
         }
     };
-    const size_t faces = out.size();
-    const size_t workers = std::min<size_t>(std::max(1u, std::thread::hardware_concurrency()), faces / 1024 + 1);
-    std::vector<std::thread> pool;
-    for (size_t k = 1; k < workers; ++k) pool.emplace_back(range, faces * k / workers, faces * (k + 1) / workers);
-    range(0, faces / workers);
-    for (std::thread& th : pool) th.join();
+    // On the caller's task arena (`--threads N` bounds this as it bounds the render); the split
+    // changes nothing in the result.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 1024),
+                      [&](const tbb::blocked_range<size_t>& r) { range(r.begin(), r.end()); });
     return out;
 }
 

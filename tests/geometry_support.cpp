@@ -2,8 +2,10 @@
 // constructions whose answer is known, and the "nothing ahead" rule against a brute-force ray
 // test over every face.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "geometry/Lens.h"
@@ -129,6 +131,21 @@ TEST(SupportingPlanes, ALensTessellationAgreesWithBruteForce) {
         }
     }
     EXPECT_GT(supporting, 0u);
+}
+
+// The faces are tested in parallel on the caller's task arena (so `--threads` bounds the set-up):
+// on one thread and on several, every plane is the same, bit for bit.
+TEST(SupportingPlanes, OneThreadAndSeveralGiveTheSamePlanes) {
+    const Lens lens({50, -50, 6, 25, 1.5168});
+    const TriMesh m = tessellate_lens(lens, 1e-3, 0, 1, 2).mesh;
+    ASSERT_GT(m.num_triangles(), 4 * 1024u);  // several of the parallel loop's ranges
+    std::vector<SupportPlane> one, many;
+    tbb::task_arena(1).execute([&] { one = supporting_planes(m); });
+    tbb::task_arena(4).execute([&] { many = supporting_planes(m); });
+    ASSERT_EQ(one.size(), many.size());
+    for (size_t f = 0; f < one.size(); ++f) {
+        EXPECT_EQ(std::memcmp(&one[f], &many[f], sizeof(SupportPlane)), 0) << f;
+    }
 }
 
 // The rule itself: from a point of a supporting face moved a little beyond its plane, every
