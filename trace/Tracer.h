@@ -89,7 +89,7 @@ struct SegmentStart {
     bool skip = false;         // the triangle just left, skipped within skip_until
     std::uint32_t skip_prim = 0;
     double skip_until = 0;
-    bool escaped = false;      // left a convex object: nothing of it can be met again
+    bool escaped = false;      // nothing of the object can be met again (State::escaped)
 };
 
 struct PrincipalPath {

@@ -45,8 +45,10 @@ struct Tracer::State {
     std::uint32_t skip_prim = 0;
     bool skip = false;
     double skip_until = 0;
-    // Left a convex object through one of its own faces into the outside air: nothing of the
-    // object (whose defects all lie inside it) can be met again.
+    // Nothing of the object can be met again along this segment: the path left a convex object
+    // through one of its own faces into the outside air (the analytic and refined
+    // representations: the object's defects all lie inside it), or, mesh-only, the facet just
+    // left is a supporting face of the whole mesh and the ray leaves it (mesh_clear_ahead).
     bool escaped = false;
     int defect = -1;  // PathResult::defect
     int depth = 0;           // interactions so far (max_depth, rr_depth)
