@@ -6,11 +6,14 @@
 //
 //   camera        for_each_camera_sample over every pixel: the stream per sample, the stratified
 //                 position, the direction on the aperture disc (Camera.h);
-//   intersection  bare Embree calls on the mesh-only representation's triangles, one per segment
-//                 of the render: the camera segments in the render's batches of 64, regrouped by
+//   intersection  bare Embree calls on the mesh-only representation's triangles, as the render
+//                 makes them: the camera segments in the render's batches of 64, regrouped by
 //                 octant into packets of 16 (EmbreeScene::intersect_coherent: rtcIntersect16,
-//                 coherent) where the tracer uses packets (Tracer::packets), the others rtcIntersect1 (the
-//                 mesh representations; 0 for analytic, which calls no BVH for the object's faces);
+//                 coherent) where the tracer uses packets (Tracer::packets); the later segments
+//                 one rtcIntersect1 each, or, where the paths go side by side (Tracer::lockstep),
+//                 a packet's paths at one depth in one intersect_packet (rtcIntersect16 with the
+//                 skip filter) and an escaped segment none (the mesh representations; 0 for
+//                 analytic, which calls no BVH for the object's faces);
 //   hit           Tracer::first_hits on the camera segments (in packets, as the render) and
 //                 Tracer::first_hit on every other recorded segment from its recorded start: the
 //                 representation's whole "next interface" step (Embree's candidates with the skip
@@ -65,6 +68,8 @@ struct Workload {
     // batches of 64 see the render's batches), and the rest.
     std::vector<Vec3> camera_o, camera_d;
     std::vector<SegmentStart> segments;
+    std::vector<std::uint32_t> segment_path;  // per segment: its path (index into camera_o)
+    std::vector<std::uint32_t> segment_depth;  // and its place in that path (1: after the camera's)
     std::vector<Interaction> interactions;
     std::vector<std::vector<RowEntry>> rows;
 };
@@ -84,7 +89,11 @@ inline Workload record(const Tracer& t, long record_pixels) {
             const PrincipalPath p = t.recorded_path(o, d, Medium::Air, &replay, stats);
             w.camera_o.push_back(p.segments.front().o);
             w.camera_d.push_back(p.segments.front().d);
-            w.segments.insert(w.segments.end(), p.segments.begin() + 1, p.segments.end());
+            for (size_t j = 1; j < p.segments.size(); ++j) {
+                w.segments.push_back(p.segments[j]);
+                w.segment_path.push_back(static_cast<std::uint32_t>(w.camera_o.size() - 1));
+                w.segment_depth.push_back(static_cast<std::uint32_t>(j));
+            }
             for (size_t v = 0; v < p.vertices.size(); ++v) {
                 const Vec3& dir = p.segments[v].d;
                 const Vec3 n = t.solid().surfaces[p.tags[v]].surface.normal(p.vertices[v]);
@@ -172,12 +181,61 @@ inline StageTimes stage_breakdown(const Tracer& tracer, const Tracer& mesh_only,
                     for (int i = 0; i < n; ++i) hits += mesh_only.embree().raw_intersect(w.camera_o[a + i], w.camera_d[a + i], 0.0f) >= 0;
                 }
             });
-            for (std::uint64_t j = 0; j + P < S; ++j) {
-                const SegmentStart& s = w.segments[j % w.segments.size()];
-                hits += mesh_only.embree().raw_intersect(s.o, s.d, 0.0f) >= 0;
+            if (!tracer.lockstep()) {
+                for (std::uint64_t j = 0; j + P < S; ++j) {
+                    const SegmentStart& s = w.segments[j % w.segments.size()];
+                    hits += mesh_only.embree().raw_intersect(s.o, s.d, 0.0f) >= 0;
+                }
             }
             sink += static_cast<double>(hits);
         });
+    if (tracer.representation() != Representation::Analytic && tracer.lockstep() && !w.segments.empty()) {
+        // The lockstep render queries the later segments as it goes: those of one packet of
+        // kPacket paths at the same depth together (intersect_packet, with each ray's skip), fewer
+        // than kMinLockstep one by one, and an escaped one (nothing of the object ahead) not at
+        // all. Replayed so from the recorded paths, once through, scaled to the render's S - P.
+        std::vector<std::vector<size_t>> packets;  // indices into w.segments
+        {
+            std::vector<std::vector<size_t>> by_depth;
+            size_t j = 0;
+            for (size_t g = 0; g < nc; g += Tracer::kPacket) {
+                by_depth.clear();
+                for (; j < w.segments.size() && w.segment_path[j] < g + Tracer::kPacket; ++j) {
+                    if (w.segments[j].escaped) continue;
+                    const size_t depth = w.segment_depth[j];
+                    if (by_depth.size() < depth) by_depth.resize(depth);
+                    by_depth[depth - 1].push_back(j);
+                }
+                for (auto& p : by_depth)
+                    if (!p.empty()) packets.push_back(std::move(p));
+            }
+        }
+        const double scale = static_cast<double>(S - P) / static_cast<double>(w.segments.size());
+        st.intersection += scale * seconds_of(reps, [&] {
+            long hits = 0;
+            Vec3 o[Tracer::kPacket], d[Tracer::kPacket];
+            Candidate c[Tracer::kPacket];
+            EmbreeScene::PacketSkip skip;
+            for (const auto& p : packets) {
+                const int q = static_cast<int>(p.size());
+                if (q < Tracer::kMinLockstep) {
+                    for (size_t j : p) hits += mesh_only.embree().raw_intersect(w.segments[j].o, w.segments[j].d, 0.0f) >= 0;
+                    continue;
+                }
+                for (int i = 0; i < q; ++i) {
+                    const SegmentStart& s = w.segments[p[static_cast<size_t>(i)]];
+                    o[i] = s.o;
+                    d[i] = s.d;
+                    skip.prim[i] = s.skip_prim;
+                    skip.on[i] = s.skip;
+                    skip.until[i] = s.skip_until;
+                }
+                mesh_only.embree().intersect_packet(o, d, q, c, &skip);
+                for (int i = 0; i < q; ++i) hits += c[i].hit;
+            }
+            sink += static_cast<double>(hits);
+        });
+    }
     PathStats scratch;
     st.hit = seconds_of(reps, [&] {
                  Tracer::FirstHit f[Tracer::kBatch];

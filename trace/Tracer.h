@@ -156,6 +156,9 @@ public:
     // (EmbreeScene::intersect_coherent); the paths then go kPacket at a time.
     static constexpr int kPacket = EmbreeScene::kPacket;
     static constexpr int kBatch = 4 * kPacket;
+    // The fewest live paths sample_lockstep queries in one packet; a path alone takes the
+    // single query (a 16-wide packet of one ray costs more than its rtcIntersect1).
+    static constexpr int kMinLockstep = 2;
     void sample_packet(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                        std::vector<PathResult>& out, size_t* ends) const;
     // Whether sample_packet uses packets: the mesh representations, with a few enclosed
@@ -228,9 +231,6 @@ private:
     // `found`: the rays' candidates, queried already (intersect_coherent), in place of the packet.
     void packet_hits(int n, const Vec3* origins, const Vec3* directions, Hit* out, PathStats* stats, int stride,
                      const Candidate* found = nullptr) const;
-    // The fewest live paths sample_lockstep queries in one packet; fewer query alone (a
-    // 16-wide packet of one or two rays costs more than their single queries).
-    static constexpr int kMinLockstep = 2;
     // Curved segments.
     Hit grin_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
     Hit walk_hit(const State& st, const MediumInfo& m, PathStats& stats) const;
