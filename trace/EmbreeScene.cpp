@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -35,10 +36,15 @@ void skip_filter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
-// The packet's context: each ray's skip (EmbreeScene::PacketSkip), found by the ray's id.
+// The packet's context: each ray's skip (EmbreeScene::PacketSkip), found by the ray's id, for
+// the n rays the caller filled. A padding lane (id >= n, valid 0 in the call) still reaches the
+// filter under Embree's 8- and 4-wide kernels (seen with max_isa=avx2, avx and sse4.2, where
+// UndefinedBehaviorSanitizer caught it reading the caller's unwritten `on`); its answer is
+// dropped, so it skips nothing and reads nothing of the caller's.
 struct PacketContext {
     RTCIntersectContext ctx;
     const EmbreeScene::PacketSkip* skip = nullptr;
+    unsigned n = 0;
 };
 
 void packet_skip_filter(const RTCFilterFunctionNArguments* args) {
@@ -46,7 +52,7 @@ void packet_skip_filter(const RTCFilterFunctionNArguments* args) {
     for (unsigned i = 0; i < args->N; ++i) {
         if (!args->valid[i]) continue;
         const unsigned id = RTCRayN_id(args->ray, args->N, i);
-        if (!q->skip->on[id]) continue;
+        if (id >= q->n || !q->skip->on[id]) continue;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
         const float t = RTCRayN_tfar(args->ray, args->N, i);
         if (prim == q->skip->prim[id] && t < q->skip->until[id]) args->valid[i] = 0;
@@ -129,8 +135,13 @@ EmbreeScene::EmbreeScene(const TriMesh* triangles, const std::vector<Patch>* pat
     Impl& m = *impl_;
     m.triangles = triangles;
     m.patches = patches;
-    m.device = rtcNewDevice("verbose=0");
-    if (!m.device) throw std::runtime_error("Embree: cannot create a device");
+    // LTM_EMBREE_CONFIG, when set, is added to Embree's device configuration: the tests run the
+    // packet paths again with max_isa=avx2 (tests/CMakeLists.txt), the 8-wide kernels that a
+    // machine without AVX-512 takes, whose 16-ray packets reach the filter in other ways.
+    std::string config = "verbose=0";
+    if (const char* extra = std::getenv("LTM_EMBREE_CONFIG"); extra && *extra) config += std::string(",") + extra;
+    m.device = rtcNewDevice(config.c_str());
+    if (!m.device) throw std::runtime_error("Embree: cannot create a device with the configuration '" + config + "'");
     m.masks = rtcGetDeviceProperty(m.device, RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
     m.scene = rtcNewScene(m.device);
     rtcSetSceneFlags(m.scene, static_cast<RTCSceneFlags>((robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE) |
@@ -219,6 +230,7 @@ void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidat
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     if (skip) {
         pc.skip = skip;
+        pc.n = static_cast<unsigned>(n);
         ctx.filter = packet_skip_filter;
     }
     alignas(64) int valid[kPacket];
