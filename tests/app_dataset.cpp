@@ -290,6 +290,8 @@ TEST_F(Dataset, BadInputIsLocatedExitsWithTwoAndWritesNothing) {
 TEST_F(Dataset, TheNumpyLoaderReadsSamplesAndTheCocoMasksAgree) {
     whole("full");
     if (!fs::exists("/usr/bin/python3")) LTM_INTEROP_SKIP() << "no /usr/bin/python3";
+    // The loader (scripts/load_dataset.py) and the check need numpy (Debian: python3-numpy).
+    if (std::system("/usr/bin/python3 -c 'import numpy' 2>/dev/null") != 0) LTM_INTEROP_SKIP() << "no numpy";
     // An independent decoder of COCO's compressed RLE (rleFrString, maskApi.c) and the checks.
     spit(dir / "check.py", R"PY(
 import json, sys
