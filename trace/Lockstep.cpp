@@ -409,8 +409,8 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
     for (int i = 0; i < n; ++i) {
         branch_result(st[i], lane[i], out.emplace_back());
         ends[i] = out.size();
-        stats.merge(lane[i]);
     }
+    stats.merge_in_order(lane, n);
 }
 
 }  // namespace ltm

@@ -35,41 +35,6 @@ const char* to_string(Representation r) {
     return "?";
 }
 
-void PathStats::merge(const PathStats& o) {
-    paths += o.paths;
-    segments += o.segments;
-    reflections += o.reflections;
-    transmissions += o.transmissions;
-    tir += o.tir;
-    absorbed_particle += o.absorbed_particle;
-    absorbed_rim += o.absorbed_rim;
-    on_display += o.on_display;
-    off_display += o.off_display;
-    toward_camera += o.toward_camera;
-    roulette_kills += o.roulette_kills;
-    truncated += o.truncated;
-    nan_events += o.nan_events;
-    splits += o.splits;
-    branches += o.branches;
-    spurious_candidates += o.spurious_candidates;
-    guard_hits += o.guard_hits;
-    leak_retries += o.leak_retries;
-    leaks_unresolved += o.leaks_unresolved;
-    seam_repairs += o.seam_repairs;
-    edge_chords += o.edge_chords;
-    packet_segments += o.packet_segments;
-    packet_fallbacks += o.packet_fallbacks;
-    grin_segments += o.grin_segments;
-    grin_evaluations += o.grin_evaluations;
-    tet_crossings += o.tet_crossings;
-    lost += o.lost;
-    hamiltonian_violations += o.hamiltonian_violations;
-    walk_boundary_exits += o.walk_boundary_exits;
-    display_weight += o.display_weight;
-    lost_weight += o.lost_weight;
-    absorbed_weight += o.absorbed_weight;
-}
-
 Tracer::Tracer(const Scene& scene, const Solid& solid, TracerOptions options)
     : scene_(scene),
       solid_(solid),
@@ -743,19 +708,6 @@ void Tracer::run(State& st, Rng* rng, PathStats& stats, PrincipalPath* rec, Spli
         first = nullptr;
         if (!interact<Principal>(st, h, rng, stats, rec, split)) return;
     }
-}
-
-bool Tracer::begin_segment(State& st, PathStats& stats, PrincipalPath* rec) const {
-    const int depth = st.depth;
-    if (depth >= options_.max_depth) {
-        ++stats.truncated;
-        stats.lost_weight += st.weight;
-        if (rec) rec->truncated = true;
-        st.weight = 0;
-        return false;
-    }
-    if (rec) rec->segments.push_back({st.o, st.d, st.medium, st.skip, st.skip_prim, st.skip_until, st.escaped});
-    return true;
 }
 
 template <bool Principal>

@@ -2,7 +2,8 @@
 // The tracer's per-path records, private to trace/: the hit record that a medium's propagation
 // step returns (Tracer::Hit), a path's state between interfaces (Tracer::State) and the split
 // estimator's pending branches (Tracer::SplitStack), the lockstep's view of a surface
-// (Tracer::LaneFace), and two small steps every path takes (mesh_only_record, branch_result).
+// (Tracer::LaneFace), and the small steps every path takes (begin_segment, mesh_only_record,
+// branch_result).
 // Shared by Tracer.cpp (one path at a time) and Lockstep.cpp (a packet's paths side by side);
 // nothing outside trace/ includes it.
 #include <algorithm>
@@ -86,6 +87,21 @@ struct Tracer::SplitStack {
 // (Lockstep.cpp) take for every path, defined here so that each inlines them: the record is then
 // written once where it lives (a returned PathResult copied into the results, or a Hit reset
 // before its fields are set, was a store reloaded and a stall; perf).
+
+// Before every segment: the depth limit (a path that reaches it is truncated), and the segment's
+// start for a recorded path.
+inline bool Tracer::begin_segment(State& st, PathStats& stats, PrincipalPath* rec) const {
+    const int depth = st.depth;
+    if (depth >= options_.max_depth) {
+        ++stats.truncated;
+        stats.lost_weight += st.weight;
+        if (rec) rec->truncated = true;
+        st.weight = 0;
+        return false;
+    }
+    if (rec) rec->segments.push_back({st.o, st.d, st.medium, st.skip, st.skip_prim, st.skip_until, st.escaped});
+    return true;
+}
 
 // mesh_only_hit's record of a triangle hit.
 inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const {
