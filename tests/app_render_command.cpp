@@ -2,7 +2,8 @@
 // "The light transport matrix"): DIR/ltm.npz (scipy CSR, float32, M*N x P*Q) and DIR/run.json;
 // results independent of --threads; existing outputs kept unless --overwrite; --pattern renders
 // y = T x (DIR/image.exr with "Image" and "StdError", DIR/image.png, no ltm.npz); bad input exits
-// with status 2, a message naming the file, and nothing written.
+// with status 2, a message naming the file, and nothing written; the command's T is the library's
+// render, bit for bit (the command links the tracer with link-time optimization).
 //
 // The scene is small (20 x 20 camera pixels, 16 samples each, 40 x 40 display pixels): every
 // render takes a few milliseconds, so the test runs the real executable many times.
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -25,6 +27,9 @@
 #include "tests/Tolerances.h"
 #include "io/Json.h"
 #include "io/LtmFile.h"
+#include "scene/SceneLoader.h"
+#include "scene/SceneSolid.h"
+#include "trace/Render.h"
 
 namespace fs = std::filesystem;
 
@@ -268,6 +273,36 @@ TEST_F(RenderCommand, TheMatrixDoesNotDependOnThreads) {
     ASSERT_FALSE(a.empty());
     EXPECT_TRUE(a == b) << "ltm.npz differs between --threads 1 and --threads 2 (" << a.size() << " vs " << b.size()
                         << " bytes)";
+}
+
+TEST_F(RenderCommand, TheCommandTracesExactlyAsTheLibrary) {
+    // ltmsim links the tracer with link-time optimization, this test the same objects' ordinary
+    // code (CMakeLists.txt, LTM_LTO); inlining across files must change no rounding (no fused
+    // multiply-adds, no fast-math), so each representation's T is the library's, bit for bit.
+    const ltm::Scene scene_in = ltm::load_scene(scene.string());
+    for (const auto& [name, representation] : {std::pair{"analytic", ltm::Representation::Analytic},
+                                               std::pair{"refined", ltm::Representation::Refined},
+                                               std::pair{"mesh-only", ltm::Representation::MeshOnly}}) {
+        SCOPED_TRACE(name);
+        const fs::path out = dir / name;
+        const Outcome r = ltmsim(render(scene, out, std::string("--threads 2 --no-previews --representation ") + name), dir);
+        ASSERT_EQ(r.status, 0) << r.err;
+        const ltm::CsrMatrix file = ltm::read_ltm_npz((out / "ltm.npz").string());
+        const ltm::Solid solid =
+            ltm::build_solid(scene_in, nullptr, representation == ltm::Representation::Analytic);
+        ltm::TracerOptions topt;
+        topt.representation = representation;  // robust, as the command's default
+        ltm::RenderOptions ropt;
+        ropt.threads = 2;
+        const ltm::RenderResult lib = ltm::render(ltm::Tracer(scene_in, solid, topt), ropt);
+        EXPECT_EQ(file.rows, lib.T.rows);
+        EXPECT_EQ(file.cols, lib.T.cols);
+        EXPECT_EQ(file.indptr, lib.T.indptr);
+        EXPECT_EQ(file.indices, lib.T.indices);
+        ASSERT_EQ(file.data.size(), lib.T.data.size());
+        EXPECT_EQ(std::memcmp(file.data.data(), lib.T.data.data(), file.data.size() * sizeof(float)), 0)
+            << "the values differ in their bits";
+    }
 }
 
 TEST_F(RenderCommand, ExistingOutputsAreKeptUnlessOverwrite) {
