@@ -87,10 +87,10 @@ struct PathStats {
 };
 
 // The counters are PathStats' first kCounters members, all std::uint64_t, and the three weight
-// sums follow them: the counters merge as one array (vector adds, not 29 named ones; the lockstep
-// tracer merges a packet's 16 paths per packet, perf), the sums by name.
+// sums follow them: the counters merge as one array (vector adds, not 29 named ones: the lockstep
+// tracer merges its 16 paths' counts after every packet; perf), the sums by name.
 inline void PathStats::merge_in_order(const PathStats* p, int n) {
-    constexpr size_t kCounters = offsetof(PathStats, display_weight) / sizeof(std::uint64_t);
+    constexpr std::size_t kCounters = offsetof(PathStats, display_weight) / sizeof(std::uint64_t);
     static_assert(std::is_standard_layout_v<PathStats> && std::is_trivially_copyable_v<PathStats>);
     static_assert(kCounters == 29 && offsetof(PathStats, display_weight) == kCounters * sizeof(std::uint64_t) &&
                       sizeof(PathStats) == offsetof(PathStats, display_weight) + 3 * sizeof(double),
@@ -101,7 +101,7 @@ inline void PathStats::merge_in_order(const PathStats* p, int n) {
     for (int i = 0; i < n; ++i) {
         std::uint64_t c[kCounters];
         std::memcpy(c, &p[i], sizeof c);
-        for (size_t k = 0; k < kCounters; ++k) sum[k] += c[k];
+        for (std::size_t k = 0; k < kCounters; ++k) sum[k] += c[k];
     }
     std::memcpy(this, sum, sizeof sum);
     // One path after another: the same sums, to the bit, as n calls of merge.
