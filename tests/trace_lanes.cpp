@@ -365,7 +365,7 @@ TEST(Lanes, EveryInstructionSetsKernelsGiveTheSameBits) {
     EXPECT_GT(drawn_lanes, 0);
 }
 
-// The camera's streams in lanes (lanes::seed_streams, lanes::uniform in the camera kernel) against
+// The camera's streams in lanes (lanes::seed_streams, lanes::uniform4 in the camera kernel) against
 // Rng itself: for every sample, the stream after Rng(seed, k, s)'s first four uniforms, on every
 // instruction set, for seeds and pixels at the ends of their ranges (the hash of k + kStreamA
 // wraps) and for samples past 2^32; and the camera kernel of every set giving the baseline's bits

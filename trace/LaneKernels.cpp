@@ -234,7 +234,9 @@ void spawn_lanes(InteractLanes& a, int count, double skip_floor) {
 void camera(CameraLanes& c, int count) {
     for (int at = 0; at < count; at += kLanes) {
         Streams r = seed_streams(c.key, load(c.sample + at));
-        const Real u0 = uniform(r), u1 = uniform(r), u2 = uniform(r), u3 = uniform(r);
+        Real u[4];
+        uniform4(r, u);
+        const Real u0 = u[0], u1 = u[1], u2 = u[2], u3 = u[3];
         store(c.state + at, r.state);
         store(c.inc + at, r.inc);
         // TelecentricCamera::sample_from.

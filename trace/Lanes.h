@@ -299,20 +299,55 @@ LTM_LANE Streams seed_streams(std::uint64_t key, const Bits& b) {
     const Bits state = (inc + h) * splat_bits(Rng::kMultiplier) + inc;
     return {state, inc};
 }
-// Rng::next_u32 per lane (the 32-bit result in the low half of each lane).
-LTM_LANE Bits next_u32(Streams& r) {
-    const Bits old = r.state;
-    r.state = old * splat_bits(Rng::kMultiplier) + r.inc;
+// PCG32's output of a state (Rng::next_u32's result from the state before its step), per lane:
+// the 32-bit result in the low half of each lane.
+LTM_LANE Bits pcg_output(const Bits& old) {
     const Bits low = splat_bits(0xffffffffull);
     const Bits xorshifted = (((old >> 18) ^ old) >> 27) & low;
     const Bits rot = old >> 59;
     return ((xorshifted >> rot) | (xorshifted << ((splat_bits(32) - rot) & splat_bits(31)))) & low;
 }
-// Rng::uniform per lane: 53 bits, converted exactly (below 2^53) and scaled by 2^-53.
-LTM_LANE Real uniform(Streams& r) {
-    const Bits hi = next_u32(r), lo = next_u32(r);
+// Rng::next_u32 per lane.
+LTM_LANE Bits next_u32(Streams& r) {
+    const Bits old = r.state;
+    r.state = old * splat_bits(Rng::kMultiplier) + r.inc;
+    return pcg_output(old);
+}
+// Rng::uniform's 53 bits from two outputs, converted exactly (below 2^53) and scaled by 2^-53.
+LTM_LANE Real uniform_of(const Bits& hi, const Bits& lo) {
     const Mask bits = (Mask)(((hi << 32) | lo) >> 11);
     return __builtin_convertvector(bits, Real) * splat(0x1.0p-53);
+}
+// Rng::uniform per lane.
+LTM_LANE Real uniform(Streams& r) {
+    const Bits hi = next_u32(r), lo = next_u32(r);
+    return uniform_of(hi, lo);
+}
+// The LCG's j-th state from x, x_j = M^j x + (M^(j-1) + ... + M + 1) inc (mod 2^64): the jump's
+// two factors, for the state and for the increment.
+struct Jump {
+    std::uint64_t state, inc;
+};
+constexpr Jump lcg_jump(int j) {
+    Jump a{1, 0};
+    for (int i = 0; i < j; ++i) a = {a.state * Rng::kMultiplier, a.inc * Rng::kMultiplier + 1};
+    return a;
+}
+// Four Rng::uniform draws per lane, and the streams after them: the eight states they read each
+// from the first by its jump (wrapping arithmetic: the very states the eight steps reach), so the
+// eight multiplications do not wait on one another as the steps' chain does (perf: the camera
+// kernel's time was that chain's latency).
+LTM_LANE void uniform4(Streams& r, Real (&u)[4]) {
+    const Bits x = r.state, inc = r.inc;
+    const auto state = [&](int j) {
+        const Jump a = lcg_jump(j);
+        return splat_bits(a.state) * x + splat_bits(a.inc) * inc;
+    };
+    u[0] = uniform_of(pcg_output(x), pcg_output(state(1)));
+    u[1] = uniform_of(pcg_output(state(2)), pcg_output(state(3)));
+    u[2] = uniform_of(pcg_output(state(4)), pcg_output(state(5)));
+    u[3] = uniform_of(pcg_output(state(6)), pcg_output(state(7)));
+    r.state = state(8);
 }
 
 }  // namespace LTM_LANE_ISA

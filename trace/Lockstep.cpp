@@ -20,6 +20,8 @@
 // Beer-Lambert share is added on every segment). tests/trace_packets.cpp compares every branch and
 // counter with the paths traced one at a time, bit for bit; tests/trace_lanes.cpp every SIMD twin
 // with its scalar function.
+#include <new>
+
 #include "trace/LaneKernels.h"
 #include "trace/Optics.h"
 #include "trace/TraceTolerance.h"
@@ -199,30 +201,11 @@ void Tracer::lanes_refined_hits(int m, const int* ids, const State* st, const Ca
     }
 }
 
-void Tracer::lanes_mesh_only_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h,
-                                  PathStats* stats) const {
-    // propagate -> straight_step -> straight_hit -> mesh_only_hit with the candidate, lane by
-    // lane: mesh-only media are straight (the constructor refuses others), and the escaped lanes
-    // (mesh_clear_ahead) never reach a query.
-    for (int j = 0; j < m; ++j) {
-        const int i = ids[j];
-        Hit& hh = h[i];
-        hh = Hit{};
-        ++stats[i].packet_segments;
-        if (c[j].hit) mesh_only_record(st[i].o, st[i].d, c[j], hh);
-        // straight_step's part: the record is never repaired here.
-        hh.d_in = st[i].d;
-        hh.length = hh.t;
-        hh.n_from = (*media_)[st[i].medium].index;
-    }
-}
-
 void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats,
                             bool* live) const {
     // Lanes the SIMD halves take: an optical interface between straight media, a finite hit, no
     // roulette yet, packed into the kernels' lanes as they are found. The rest interact alone,
     // before anything of theirs changes here.
-    const bool mesh_only = options_.representation == Representation::MeshOnly;
     lanes::InteractLanes a;
     int lane_of[lanes::kRays];  // lanes of the kernels: ids[k] for k = lane_of[j]
     Medium to[lanes::kRays];
@@ -256,7 +239,7 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
                 a.n_from[n] = hh.n_from;
                 a.n_to[n] = n_to;  // index_at of a straight medium
                 a.entering[n] = in ? -1 : 0;
-                a.skip_chord[n] = hh.triangle && !mesh_only ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
+                a.skip_chord[n] = hh.triangle ? solid_.tag_chord_error[static_cast<size_t>(hh.tag)] : 0.0;
                 a.state[n] = rngs[i].state();
                 a.inc[n] = rngs[i].inc();
                 to[n] = t;
@@ -316,7 +299,6 @@ void Tracer::lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng*
         s.skip = hh.triangle;
         s.skip_prim = hh.prim;
         if (hh.triangle) s.skip_until = a.skip_until[j];
-        if (mesh_only) s.escaped = mesh_clear_ahead(s);  // as interact's spawn
         live[i] = true;
     }
 }
@@ -328,7 +310,6 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
     PathStats lane[kPacket];
     Hit h[kPacket];
     bool live[kPacket];
-    const bool mesh_only = options_.representation == Representation::MeshOnly;
     int ids[kPacket];
     for (int i = 0; i < n; ++i) {
         st[i].o = origins[i];
@@ -337,9 +318,7 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
         ids[i] = i;
     }
     // The camera segments' hits (whatever begin_segment then says, as the paths one at a time).
-    if (mesh_only)
-        lanes_mesh_only_hits(n, ids, st, camera, h, lane);
-    else if (!analytic && !refined_lanes_)
+    if (!analytic && !refined_lanes_)
         packet_hits(n, origins, directions, h, lane, 1, camera);
     int m = 0;
     for (int i = 0; i < n; ++i) {
@@ -400,14 +379,224 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
             embree_->intersect_packet(o, d, q, c, &skip);
             if (refined_lanes_)
                 lanes_refined_hits(q, query, st, c, h, lane);
-            else if (mesh_only)
-                lanes_mesh_only_hits(q, query, st, c, h, lane);
             else
                 for (int j = 0; j < q; ++j) h[query[j]] = propagate(st[query[j]], lane[query[j]], &c[j]);
         }
     }
     for (int i = 0; i < n; ++i) {
         branch_result(st[i], lane[i], out.emplace_back());
+        ends[i] = out.size();
+    }
+    stats.merge_in_order(lane, n);
+}
+
+// The mesh-only lockstep (sample_mesh_lockstep): the paths' states kept lane by lane in arrays
+// from one packet query to the next, each hit's record made where the interaction kernels read
+// it, no Tracer::Hit or Tracer::State per lane (perf: writing and reading those records was most
+// of sample_lockstep's own time). A lane whose step the kernels do not cover leaves the lockstep
+// for good: its state becomes a State and the path runs on alone (run), which is what it computes
+// in the lockstep too (tests/trace_packets.cpp).
+namespace {
+
+// The live paths' states, lane by lane (Tracer::State's fields, those a mesh-only path uses).
+struct MeshPaths {
+    lanes::Vec3s o, d;
+    alignas(64) double skip_until[Tracer::kPacket];
+    double weight[Tracer::kPacket];
+    std::uint32_t skip_prim[Tracer::kPacket];
+    Medium medium[Tracer::kPacket];
+    int depth[Tracer::kPacket], defect[Tracer::kPacket], choices[Tracer::kPacket];
+    bool skip[Tracer::kPacket];
+};
+
+}  // namespace
+
+void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                                  std::vector<PathResult>& out, size_t* ends, const Candidate* camera) const {
+    MeshPaths s;
+    PathStats lane[kPacket];
+    // The lanes that left the lockstep, with their states (constructed as they leave).
+    bool alone[kPacket];
+    alignas(State) unsigned char alone_storage[kPacket * sizeof(State)];
+    State* const alone_st = reinterpret_cast<State*>(alone_storage);
+    int ids[kPacket];
+    Candidate c[kPacket];
+    for (int i = 0; i < n; ++i) {
+        s.o.set(i, origins[i]);
+        s.d.set(i, directions[i]);
+        s.skip_until[i] = 0;
+        s.weight[i] = 1;
+        s.skip_prim[i] = 0;
+        s.medium[i] = Medium::Air;
+        s.depth[i] = 0;
+        s.defect[i] = -1;
+        s.choices[i] = 0;
+        s.skip[i] = false;
+        alone[i] = false;
+    }
+    // Lane i as a State (escaped is false: an escaped path ends in the lockstep).
+    const auto leave = [&](int i) -> State& {
+        alone[i] = true;
+        State* st = new (&alone_st[i]) State;
+        st->o = s.o.get(i);
+        st->d = s.d.get(i);
+        st->medium = s.medium[i];
+        st->weight = s.weight[i];
+        st->skip_prim = s.skip_prim[i];
+        st->skip = s.skip[i];
+        st->skip_until = s.skip_until[i];
+        st->defect = s.defect[i];
+        st->depth = s.depth[i];
+        st->random_choices = s.choices[i];
+        return *st;
+    };
+    // The segment's start (begin_segment): false where the depth limit truncates the path.
+    const auto begin = [&](int i) {
+        if (s.depth[i] < options_.max_depth) return true;
+        ++lane[i].truncated;
+        lane[i].lost_weight += s.weight[i];
+        s.weight[i] = 0;
+        return false;
+    };
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        ++lane[i].paths;
+        ++lane[i].packet_segments;
+        if (!begin(i)) continue;
+        c[m] = camera[i];
+        ids[m++] = i;
+    }
+    const double skip_floor = trace_tol::kSkipFloatUlps * trace_tol::kFloatUlp * scale_;
+    while (m > 0) {
+        // The interaction at each lane's candidate: mesh_only_hit's record (mesh_only_record),
+        // packed where the kernels read it; lanes_interact's rule for which lanes they take.
+        lanes::InteractLanes a;
+        int lane_of[kPacket];
+        const LaneFace* face[kPacket];
+        int k = 0;
+        for (int j = 0; j < m; ++j) {
+            const int i = ids[j];
+            const Candidate& cj = c[j];
+            if (!cj.hit) {  // interact: nothing ahead, the path leaves (branch_result looks for the display)
+                ++lane[i].segments;
+                continue;
+            }
+            const Vec3 o = s.o.get(i), d = s.d.get(i);
+            const Vec3 p = o + d * cj.t;
+            const Vec3& n_out = face_normals_[cj.prim];
+            const double offset = mesh_only_offset(p, cj.t);
+            const double n_from = (*media_)[s.medium[i]].index;
+            const bool in = dot(d, n_out) < 0;
+            const LaneFace& f = lane_faces_[2 * static_cast<size_t>(cj.tag) + in];
+            bool simple = f.simple & !f.inclusions & (s.depth[i] + 1 < options_.rr_depth);
+            simple = simple && (is_finite(p) & is_finite(n_out) & is_finite(d) & std::isfinite(n_from));
+            if (!simple) {
+                // The path goes on alone from its hit, as propagate records it.
+                Hit h;
+                mesh_only_record(o, d, cj, h);
+                h.d_in = d;
+                h.length = h.t;
+                h.n_from = n_from;
+                run<false>(leave(i), &rngs[i], lane[i], nullptr, nullptr, &h);
+                continue;
+            }
+            a.d_in.set(k, d);
+            a.n_out.set(k, n_out);
+            a.p.set(k, p);
+            a.offset[k] = offset;
+            a.n_from[k] = n_from;
+            a.n_to[k] = f.n_to;
+            a.entering[k] = in ? -1 : 0;
+            a.skip_chord[k] = 0;  // mesh-only: the facets are the surface
+            a.state[k] = rngs[i].state();
+            a.inc[k] = rngs[i].inc();
+            s.skip_prim[i] = cj.prim;  // the facet the spawned ray leaves (read only once it is spawned)
+            face[k] = &f;
+            lane_of[k++] = i;
+        }
+        m = 0;
+        if (k > 0) {
+            const lanes::Kernels& kernels = lanes::kernels();
+            const int count = kernels.count(k);
+            pad_lanes(k, count, a.d_in, a.n_out, a.p, a.offset, a.n_from, a.n_to, a.entering, a.skip_chord, a.state,
+                      a.inc);
+            kernels.fresnel(a, count);
+            kernels.spawn(a, count, skip_floor);
+            for (int j = 0; j < k; ++j) {
+                const int i = lane_of[j];
+                PathStats& ps = lane[i];
+                const LaneFace& f = *face[j];
+                if (a.tir[j]) {
+                    ++ps.tir;
+                } else {
+                    rngs[i] = Rng::from_state(a.state[j], a.inc[j]);
+                    ++s.choices[i];
+                }
+                ++ps.segments;
+                if (s.defect[i] < 0) {  // as interact
+                    const int dk = s.medium[i].defect();
+                    if (dk >= 0 && scene_.defects[static_cast<size_t>(dk)].segment_min_rho2(s.o.get(i), a.p.get(j)) < 1.0)
+                        s.defect[i] = dk;
+                    else if (f.defect >= 0)
+                        s.defect[i] = f.defect;
+                }
+                if (a.reflect[j]) {
+                    if (!a.tir[j]) ++ps.reflections;
+                } else {
+                    s.medium[i] = f.to;
+                    ++ps.transmissions;
+                }
+                if (!a.finite[j]) {  // spawn's check
+                    ++ps.nan_events;
+                    s.weight[i] = 0;
+                    continue;
+                }
+                const Vec3 o = a.o.get(j), d = a.d.get(j);
+                s.o.set(i, o);
+                s.d.set(i, d);
+                s.skip[i] = true;
+                s.skip_until[i] = a.skip_until[j];
+                // The next segment (run's loop): nothing ahead where the ray leaves a supporting
+                // face (mesh_clear_ahead), and interact counts that segment and ends the path.
+                ++s.depth[i];
+                if (!begin(i)) continue;
+                if (mesh_clear_ahead(s.skip_prim[i], o, d)) {
+                    ++ps.segments;
+                    continue;
+                }
+                ids[m++] = i;
+            }
+        }
+        if (m == 0) break;
+        if (m < kMinLockstep) {  // alone from its segment's start
+            run<false>(leave(ids[0]), &rngs[ids[0]], lane[ids[0]], nullptr, nullptr);
+            break;
+        }
+        Vec3 o[kPacket], d[kPacket];
+        EmbreeScene::PacketSkip skip;
+        for (int j = 0; j < m; ++j) {
+            const int i = ids[j];
+            o[j] = s.o.get(i);
+            d[j] = s.d.get(i);
+            skip.prim[j] = s.skip_prim[i];
+            skip.on[j] = s.skip[i];
+            skip.until[j] = s.skip_until[i];
+            ++lane[i].packet_segments;
+        }
+        embree_->intersect_packet(o, d, m, c, &skip);
+    }
+    for (int i = 0; i < n; ++i) {
+        if (alone[i]) {
+            branch_result(alone_st[i], lane[i], out.emplace_back());
+        } else {
+            State st;
+            st.o = s.o.get(i);
+            st.d = s.d.get(i);
+            st.weight = s.weight[i];
+            st.defect = s.defect[i];
+            st.random_choices = s.choices[i];
+            branch_result(st, lane[i], out.emplace_back());
+        }
         ends[i] = out.size();
     }
     stats.merge_in_order(lane, n);

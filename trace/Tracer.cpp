@@ -983,6 +983,10 @@ void Tracer::sample_packet(int n, const Vec3* origins, const Vec3* directions, R
     if (mesh) embree_->intersect_coherent(origins, directions, n, camera);
     for (int a = 0; a < n; a += kPacket) {
         const int m = std::min(kPacket, n - a);
+        if (lockstep_ && options_.representation == Representation::MeshOnly) {
+            sample_mesh_lockstep(m, origins + a, directions + a, rngs + a, stats, out, ends + a, camera + a);
+            continue;
+        }
         if (lockstep_) {
             sample_lockstep(m, origins + a, directions + a, rngs + a, stats, out, ends + a, mesh ? camera + a : nullptr);
             continue;

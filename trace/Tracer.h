@@ -253,8 +253,11 @@ private:
     Hit mesh_only_hit(const State& st, PathStats& stats, const Candidate* first) const;
     // mesh_only_hit's record of a triangle hit c of the ray (o, d), written into a reset h.
     void mesh_only_record(const Vec3& o, const Vec3& d, const Candidate& c, Hit& h) const;
-    // Mesh-only: the ray st just spawned off a supporting face meets no triangle (TracerState.h).
+    static double mesh_only_offset(const Vec3& p, double t);  // its spawn offset (TracerState.h)
+    // Mesh-only: the ray st just spawned off a supporting face meets no triangle (TracerState.h);
+    // the same for a ray (o, d) spawned off face prim.
     bool mesh_clear_ahead(const State& st) const;
+    bool mesh_clear_ahead(std::uint32_t prim, const Vec3& o, const Vec3& d) const;
     // Whether a packet's triangle candidate c of the ray (o, d) is what the full single-ray query
     // returns: no ellipsoid patch (which the packet does not see) can lie before it.
     bool packet_answers(const Candidate& c, const Vec3& o, const Vec3& d) const;
@@ -288,6 +291,10 @@ private:
     // `camera`: the camera rays' triangle candidates (the mesh representations; null for analytic).
     void sample_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                          std::vector<PathResult>& out, size_t* ends, const Candidate* camera) const;
+    // The same for mesh-only, whose paths' states stay in lane arrays from one packet query to
+    // the next (trace/Lockstep.cpp).
+    void sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
+                              std::vector<PathResult>& out, size_t* ends, const Candidate* camera) const;
     // Its two steps over the lanes ids[0 .. m): the next interface of each (analytic: the object's
     // patches in SIMD lanes, scalar propagate for the lanes they cannot decide), and the
     // interaction at it (SIMD Fresnel, Snell and spawn; scalar interact for the uncommon ones).
@@ -296,9 +303,6 @@ private:
     // refined: the packet's candidates c[j] of the lanes ids[j], refined in SIMD lanes where they
     // are facets of the object's caps (refined_lanes_), by refined_hit otherwise.
     void lanes_refined_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h, PathStats* stats) const;
-    // mesh-only: the records of the candidates c[j] of the lanes ids[j], built in place in h[ids[j]],
-    // each what propagate(st, stats, &c[j]) returns (without its calls and the copy of its record).
-    void lanes_mesh_only_hits(int m, const int* ids, const State* st, const Candidate* c, Hit* h, PathStats* stats) const;
     void lanes_interact(int m, const int* ids, State* st, const Hit* h, Rng* rngs, PathStats* stats, bool* live) const;
     // Up to this many enclosed ellipsoids, the analytic representation tests them in a loop (a box
     // test each) instead of querying Embree's BVH, whose call overhead is larger (measured, not a

@@ -112,9 +112,18 @@ inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candida
     h.triangle = true;
     h.p = o + d * c.t;
     h.n_out = face_normals_[c.prim];
-    // The float hit's error: a few float ulps of the coordinates involved.
-    const double mag = std::max({std::fabs(h.p.x), std::fabs(h.p.y), std::fabs(h.p.z), std::fabs(c.t)});
-    h.offset = trace_tol::kMeshOnlyOffsetUlps * trace_tol::kFloatUlp * mag;
+    h.offset = mesh_only_offset(h.p, c.t);
+}
+
+// The spawn offset of a triangle hit at p, t along its ray: the float hit's error, a few float
+// ulps of the coordinates involved. (The largest of the four as std::max({...}) picks it, the
+// first largest by <, written out: the list's loop was a visible cost per hit; perf.)
+inline double Tracer::mesh_only_offset(const Vec3& p, double t) {
+    double mag = std::fabs(p.x);
+    if (mag < std::fabs(p.y)) mag = std::fabs(p.y);
+    if (mag < std::fabs(p.z)) mag = std::fabs(p.z);
+    if (mag < std::fabs(t)) mag = std::fabs(t);
+    return trace_tol::kMeshOnlyOffsetUlps * trace_tol::kFloatUlp * mag;
 }
 
 // The mesh-only escape rule: a ray spawned off a supporting face, beyond its plane and not heading
@@ -125,10 +134,12 @@ inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candida
 // convex object is not exactly convex (4 % of the paper lens's faces have a vertex up to 0.8 um
 // beyond their plane; docs/benchmarks.md), and those faces keep their query.
 inline bool Tracer::mesh_clear_ahead(const State& st) const {
-    if (!st.skip || clear_planes_.empty()) return false;
+    return st.skip && mesh_clear_ahead(st.skip_prim, st.o, st.d);
+}
+inline bool Tracer::mesh_clear_ahead(std::uint32_t prim, const Vec3& o, const Vec3& d) const {
+    if (clear_planes_.empty()) return false;
     const auto f = [](double x) { return static_cast<double>(static_cast<float>(x)); };
-    const Vec3 o{f(st.o.x), f(st.o.y), f(st.o.z)}, d{f(st.d.x), f(st.d.y), f(st.d.z)};
-    return clears_mesh(clear_planes_[st.skip_prim], o, d);
+    return clears_mesh(clear_planes_[prim], {f(o.x), f(o.y), f(o.z)}, {f(d.x), f(d.y), f(d.z)});
 }
 
 // Where an ended branch lands on the display (weight 0 or off the display: pixel -1), written
