@@ -220,7 +220,8 @@ Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, doub
 
 bool EmbreeScene::packets_supported() const { return impl_->masks && impl_->tri_geom != RTC_INVALID_GEOMETRY_ID; }
 
-void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip) const {
+template <class Rays>
+void EmbreeScene::packet_query(int n, Candidate* out, const PacketSkip* skip, const Rays& ray) const {
     if (n < 0 || n > kPacket) throw std::invalid_argument("EmbreeScene::intersect_packet: more rays than a packet holds");
     if (!packets_supported()) throw std::logic_error("EmbreeScene::intersect_packet: this scene cannot take packets");
     if (n == 0) return;
@@ -238,12 +239,14 @@ void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidat
     // Each lane exactly as make_rayhit rounds a single ray; the unused lanes (invalid) repeat
     // the first. Fixed-count loops, which the compiler turns into whole-vector stores.
     for (int i = 0; i < n; ++i) {
-        rh.ray.org_x[i] = static_cast<float>(o[i].x);
-        rh.ray.org_y[i] = static_cast<float>(o[i].y);
-        rh.ray.org_z[i] = static_cast<float>(o[i].z);
-        rh.ray.dir_x[i] = static_cast<float>(d[i].x);
-        rh.ray.dir_y[i] = static_cast<float>(d[i].y);
-        rh.ray.dir_z[i] = static_cast<float>(d[i].z);
+        float r[6];
+        ray(i, r);
+        rh.ray.org_x[i] = r[0];
+        rh.ray.org_y[i] = r[1];
+        rh.ray.org_z[i] = r[2];
+        rh.ray.dir_x[i] = r[3];
+        rh.ray.dir_y[i] = r[4];
+        rh.ray.dir_z[i] = r[5];
     }
     for (int i = n; i < kPacket; ++i) {
         rh.ray.org_x[i] = rh.ray.org_x[0];
@@ -276,6 +279,30 @@ void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidat
         }
         out[i] = c;
     }
+}
+
+void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip) const {
+    packet_query(n, out, skip, [&](int i, float* r) {
+        r[0] = static_cast<float>(o[i].x);
+        r[1] = static_cast<float>(o[i].y);
+        r[2] = static_cast<float>(o[i].z);
+        r[3] = static_cast<float>(d[i].x);
+        r[4] = static_cast<float>(d[i].y);
+        r[5] = static_cast<float>(d[i].z);
+    });
+}
+
+void EmbreeScene::intersect_packet(const RayLanes& rays, const int* lanes, int n, Candidate* out,
+                                   const PacketSkip* skip) const {
+    packet_query(n, out, skip, [&](int i, float* r) {
+        const int k = lanes[i];
+        r[0] = static_cast<float>(rays.ox[k]);
+        r[1] = static_cast<float>(rays.oy[k]);
+        r[2] = static_cast<float>(rays.oz[k]);
+        r[3] = static_cast<float>(rays.dx[k]);
+        r[4] = static_cast<float>(rays.dy[k]);
+        r[5] = static_cast<float>(rays.dz[k]);
+    });
 }
 
 void EmbreeScene::intersect_coherent(const Vec3* o, const Vec3* d, int n, Candidate* out) const {

@@ -45,6 +45,12 @@ public:
         double until[kPacket];
     };
     void intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip = nullptr) const;
+    // The same for the rays lanes[0 .. n) of arrays of rays by component (the lockstep's).
+    struct RayLanes {
+        const double *ox, *oy, *oz, *dx, *dy, *dz;
+    };
+    void intersect_packet(const RayLanes& rays, const int* lanes, int n, Candidate* out,
+                          const PacketSkip* skip = nullptr) const;
     // Any number of rays with nothing to skip (camera rays), out[i] the packet query's answer for
     // ray i: the single query's, as intersect_packet's is (tests/trace_packets.cpp), but for a
     // ray through an edge between two facets, which either may take depending on the rays that
@@ -64,6 +70,9 @@ public:
     long raw_intersect(const Vec3& o, const Vec3& d, float tmin) const;
 
 private:
+    // One packet query of n rays, ray(i, r) writing ray i's origin and direction as floats.
+    template <class Rays>
+    void packet_query(int n, Candidate* out, const PacketSkip* skip, const Rays& ray) const;
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -390,88 +390,105 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
     stats.merge_in_order(lane, n);
 }
 
-// The mesh-only lockstep (sample_mesh_lockstep): the paths' states kept lane by lane in arrays
-// from one packet query to the next, each hit's record made where the interaction kernels read
-// it, no Tracer::Hit or Tracer::State per lane (perf: writing and reading those records was most
-// of sample_lockstep's own time). A lane whose step the kernels do not cover leaves the lockstep
-// for good: its state becomes a State and the path runs on alone (run), which is what it computes
-// in the lockstep too (tests/trace_packets.cpp).
-namespace {
-
-// The live paths' states, lane by lane (Tracer::State's fields, those a mesh-only path uses).
-struct MeshPaths {
-    lanes::Vec3s o, d;
-    alignas(64) double skip_until[Tracer::kPacket];
-    double weight[Tracer::kPacket];
-    std::uint32_t skip_prim[Tracer::kPacket];
-    Medium medium[Tracer::kPacket];
-    int depth[Tracer::kPacket], defect[Tracer::kPacket], choices[Tracer::kPacket];
-    bool skip[Tracer::kPacket];
-};
-
-}  // namespace
-
+// The mesh-only lockstep (sample_mesh_lockstep): the paths' states kept lane by lane in the
+// interaction kernels' own arrays from one packet query to the next (the kernels read each ray
+// where spawn_lanes left it, and each stream where fresnel_lanes left it), each hit's record made
+// where they read it: no Tracer::Hit or Tracer::State per lane, nothing copied between stages
+// but the hit (perf: writing and reading those records was most of sample_lockstep's own time
+// for mesh-only). Lane i is path i throughout; the kernels go through every lane, the ended ones
+// included (their values stay finite or are ignored, as the padding lanes'). A lane whose step
+// the kernels do not cover leaves the lockstep for good: its state becomes a State and the path
+// runs on alone (run), which is what it computes in the lockstep too (tests/trace_packets.cpp).
 void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
                                   std::vector<PathResult>& out, size_t* ends, const Candidate* camera) const {
-    MeshPaths s;
+    // Path i: its ray a.o, a.d (spawn_lanes' output, where the next segment starts), its stream
+    // a.state, a.inc, and the rest of its State here.
+    lanes::InteractLanes a;
+    alignas(64) double weight[kPacket];
+    std::uint32_t skip_prim[kPacket];
+    bool skip[kPacket];
+    Medium medium[kPacket];
+    int depth[kPacket], defect[kPacket], choices[kPacket];
     PathStats lane[kPacket];
     // The lanes that left the lockstep, with their states (constructed as they leave).
     bool alone[kPacket];
     alignas(State) unsigned char alone_storage[kPacket * sizeof(State)];
     State* const alone_st = reinterpret_cast<State*>(alone_storage);
-    int ids[kPacket];
-    Candidate c[kPacket];
+    const lanes::Kernels& kernels = lanes::kernels();
+    const int count = kernels.count(n);
+    for (int i = 0; i < count; ++i) {  // lanes past n repeat the first: finite, ignored
+        const int from = i < n ? i : 0;
+        a.o.set(i, origins[from]);
+        a.d.set(i, directions[from]);
+        a.skip_until[i] = 0;
+        a.state[i] = rngs[from].state();
+        a.inc[i] = rngs[from].inc();
+        a.offset[i] = a.n_from[i] = a.n_to[i] = 1;
+        a.entering[i] = 0;
+        a.skip_chord[i] = 0;  // mesh-only: the facets are the surface
+        a.n_out.set(i, {0, 0, 1});
+        a.p.set(i, origins[from]);
+    }
     for (int i = 0; i < n; ++i) {
-        s.o.set(i, origins[i]);
-        s.d.set(i, directions[i]);
-        s.skip_until[i] = 0;
-        s.weight[i] = 1;
-        s.skip_prim[i] = 0;
-        s.medium[i] = Medium::Air;
-        s.depth[i] = 0;
-        s.defect[i] = -1;
-        s.choices[i] = 0;
-        s.skip[i] = false;
+        weight[i] = 1;
+        skip_prim[i] = 0;
+        skip[i] = false;
+        medium[i] = Medium::Air;
+        depth[i] = 0;
+        defect[i] = -1;
+        choices[i] = 0;
         alone[i] = false;
     }
-    // Lane i as a State (escaped is false: an escaped path ends in the lockstep).
+    // Where a path ends in the lockstep: its stream and its last ray as they are now (the kernels
+    // go on writing its lane).
+    Vec3 last_o[kPacket], last_d[kPacket];
+    const auto end = [&](int i) {
+        rngs[i] = Rng::from_state(a.state[i], a.inc[i]);
+        last_o[i] = a.o.get(i);
+        last_d[i] = a.d.get(i);
+    };
+    // Lane i as a State (escaped is false: an escaped path ends in the lockstep), to go on alone.
     const auto leave = [&](int i) -> State& {
         alone[i] = true;
+        rngs[i] = Rng::from_state(a.state[i], a.inc[i]);
         State* st = new (&alone_st[i]) State;
-        st->o = s.o.get(i);
-        st->d = s.d.get(i);
-        st->medium = s.medium[i];
-        st->weight = s.weight[i];
-        st->skip_prim = s.skip_prim[i];
-        st->skip = s.skip[i];
-        st->skip_until = s.skip_until[i];
-        st->defect = s.defect[i];
-        st->depth = s.depth[i];
-        st->random_choices = s.choices[i];
+        st->o = a.o.get(i);
+        st->d = a.d.get(i);
+        st->medium = medium[i];
+        st->weight = weight[i];
+        st->skip_prim = skip_prim[i];
+        st->skip = skip[i];
+        st->skip_until = a.skip_until[i];
+        st->defect = defect[i];
+        st->depth = depth[i];
+        st->random_choices = choices[i];
         return *st;
     };
     // The segment's start (begin_segment): false where the depth limit truncates the path.
     const auto begin = [&](int i) {
-        if (s.depth[i] < options_.max_depth) return true;
+        if (depth[i] < options_.max_depth) return true;
         ++lane[i].truncated;
-        lane[i].lost_weight += s.weight[i];
-        s.weight[i] = 0;
+        lane[i].lost_weight += weight[i];
+        weight[i] = 0;
         return false;
     };
+    int ids[kPacket];  // the live lanes at their segments' start, with the segments' candidates c
+    Candidate c[kPacket];
     int m = 0;
     for (int i = 0; i < n; ++i) {
         ++lane[i].paths;
         ++lane[i].packet_segments;
-        if (!begin(i)) continue;
+        if (!begin(i)) {
+            end(i);
+            continue;
+        }
         c[m] = camera[i];
         ids[m++] = i;
     }
     const double skip_floor = trace_tol::kSkipFloatUlps * trace_tol::kFloatUlp * scale_;
     while (m > 0) {
-        // The interaction at each lane's candidate: mesh_only_hit's record (mesh_only_record),
-        // packed where the kernels read it; lanes_interact's rule for which lanes they take.
-        lanes::InteractLanes a;
-        int lane_of[kPacket];
+        // The interaction at each lane's candidate: mesh_only_hit's record (mesh_only_record)
+        // where the kernels read it, for the lanes lanes_interact would give them.
         const LaneFace* face[kPacket];
         int k = 0;
         for (int j = 0; j < m; ++j) {
@@ -479,16 +496,16 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             const Candidate& cj = c[j];
             if (!cj.hit) {  // interact: nothing ahead, the path leaves (branch_result looks for the display)
                 ++lane[i].segments;
+                end(i);
                 continue;
             }
-            const Vec3 o = s.o.get(i), d = s.d.get(i);
+            const Vec3 o = a.o.get(i), d = a.d.get(i);
             const Vec3 p = o + d * cj.t;
             const Vec3& n_out = face_normals_[cj.prim];
-            const double offset = mesh_only_offset(p, cj.t);
-            const double n_from = (*media_)[s.medium[i]].index;
+            const double n_from = (*media_)[medium[i]].index;
             const bool in = dot(d, n_out) < 0;
             const LaneFace& f = lane_faces_[2 * static_cast<size_t>(cj.tag) + in];
-            bool simple = f.simple & !f.inclusions & (s.depth[i] + 1 < options_.rr_depth);
+            bool simple = f.simple & !f.inclusions & (depth[i] + 1 < options_.rr_depth);
             simple = simple && (is_finite(p) & is_finite(n_out) & is_finite(d) & std::isfinite(n_from));
             if (!simple) {
                 // The path goes on alone from its hit, as propagate records it.
@@ -500,68 +517,58 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
                 run<false>(leave(i), &rngs[i], lane[i], nullptr, nullptr, &h);
                 continue;
             }
-            a.d_in.set(k, d);
-            a.n_out.set(k, n_out);
-            a.p.set(k, p);
-            a.offset[k] = offset;
-            a.n_from[k] = n_from;
-            a.n_to[k] = f.n_to;
-            a.entering[k] = in ? -1 : 0;
-            a.skip_chord[k] = 0;  // mesh-only: the facets are the surface
-            a.state[k] = rngs[i].state();
-            a.inc[k] = rngs[i].inc();
-            s.skip_prim[i] = cj.prim;  // the facet the spawned ray leaves (read only once it is spawned)
-            face[k] = &f;
-            lane_of[k++] = i;
+            if (defect[i] < 0) {  // as interact
+                const int dk = medium[i].defect();
+                if (dk >= 0 && scene_.defects[static_cast<size_t>(dk)].segment_min_rho2(o, p) < 1.0)
+                    defect[i] = dk;
+                else if (f.defect >= 0)
+                    defect[i] = f.defect;
+            }
+            a.n_out.set(i, n_out);
+            a.p.set(i, p);
+            a.offset[i] = mesh_only_offset(p, cj.t);
+            a.n_from[i] = n_from;
+            a.n_to[i] = f.n_to;
+            a.entering[i] = in ? -1 : 0;
+            skip_prim[i] = cj.prim;  // the facet the spawned ray leaves (read once it is spawned)
+            face[i] = &f;
+            ids[k++] = i;  // k <= j: the lanes in the kernels' hands, in order
         }
         m = 0;
         if (k > 0) {
-            const lanes::Kernels& kernels = lanes::kernels();
-            const int count = kernels.count(k);
-            pad_lanes(k, count, a.d_in, a.n_out, a.p, a.offset, a.n_from, a.n_to, a.entering, a.skip_chord, a.state,
-                      a.inc);
+            a.d_in = a.d;
             kernels.fresnel(a, count);
             kernels.spawn(a, count, skip_floor);
             for (int j = 0; j < k; ++j) {
-                const int i = lane_of[j];
+                const int i = ids[j];
                 PathStats& ps = lane[i];
-                const LaneFace& f = *face[j];
-                if (a.tir[j]) {
-                    ++ps.tir;
-                } else {
-                    rngs[i] = Rng::from_state(a.state[j], a.inc[j]);
-                    ++s.choices[i];
-                }
+                const LaneFace& f = *face[i];
+                if (a.tir[i]) ++ps.tir;
+                else ++choices[i];
                 ++ps.segments;
-                if (s.defect[i] < 0) {  // as interact
-                    const int dk = s.medium[i].defect();
-                    if (dk >= 0 && scene_.defects[static_cast<size_t>(dk)].segment_min_rho2(s.o.get(i), a.p.get(j)) < 1.0)
-                        s.defect[i] = dk;
-                    else if (f.defect >= 0)
-                        s.defect[i] = f.defect;
-                }
-                if (a.reflect[j]) {
-                    if (!a.tir[j]) ++ps.reflections;
+                if (a.reflect[i]) {
+                    if (!a.tir[i]) ++ps.reflections;
                 } else {
-                    s.medium[i] = f.to;
+                    medium[i] = f.to;
                     ++ps.transmissions;
                 }
-                if (!a.finite[j]) {  // spawn's check
+                if (!a.finite[i]) {  // spawn's check
                     ++ps.nan_events;
-                    s.weight[i] = 0;
+                    weight[i] = 0;
+                    end(i);
                     continue;
                 }
-                const Vec3 o = a.o.get(j), d = a.d.get(j);
-                s.o.set(i, o);
-                s.d.set(i, d);
-                s.skip[i] = true;
-                s.skip_until[i] = a.skip_until[j];
+                skip[i] = true;
                 // The next segment (run's loop): nothing ahead where the ray leaves a supporting
                 // face (mesh_clear_ahead), and interact counts that segment and ends the path.
-                ++s.depth[i];
-                if (!begin(i)) continue;
-                if (mesh_clear_ahead(s.skip_prim[i], o, d)) {
+                ++depth[i];
+                if (!begin(i)) {
+                    end(i);
+                    continue;
+                }
+                if (mesh_clear_ahead(skip_prim[i], a.o.get(i), a.d.get(i))) {
                     ++ps.segments;
+                    end(i);
                     continue;
                 }
                 ids[m++] = i;
@@ -572,29 +579,26 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             run<false>(leave(ids[0]), &rngs[ids[0]], lane[ids[0]], nullptr, nullptr);
             break;
         }
-        Vec3 o[kPacket], d[kPacket];
-        EmbreeScene::PacketSkip skip;
+        EmbreeScene::PacketSkip skips;
         for (int j = 0; j < m; ++j) {
             const int i = ids[j];
-            o[j] = s.o.get(i);
-            d[j] = s.d.get(i);
-            skip.prim[j] = s.skip_prim[i];
-            skip.on[j] = s.skip[i];
-            skip.until[j] = s.skip_until[i];
+            skips.prim[j] = skip_prim[i];
+            skips.on[j] = skip[i];
+            skips.until[j] = a.skip_until[i];
             ++lane[i].packet_segments;
         }
-        embree_->intersect_packet(o, d, m, c, &skip);
+        embree_->intersect_packet({a.o.x, a.o.y, a.o.z, a.d.x, a.d.y, a.d.z}, ids, m, c, &skips);
     }
     for (int i = 0; i < n; ++i) {
         if (alone[i]) {
             branch_result(alone_st[i], lane[i], out.emplace_back());
         } else {
             State st;
-            st.o = s.o.get(i);
-            st.d = s.d.get(i);
-            st.weight = s.weight[i];
-            st.defect = s.defect[i];
-            st.random_choices = s.choices[i];
+            st.o = last_o[i];
+            st.d = last_d[i];
+            st.weight = weight[i];
+            st.defect = defect[i];
+            st.random_choices = choices[i];
             branch_result(st, lane[i], out.emplace_back());
         }
         ends[i] = out.size();
