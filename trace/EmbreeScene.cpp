@@ -220,6 +220,18 @@ Candidate EmbreeScene::intersect(const Vec3& o, const Vec3& d, double tmin, doub
 
 bool EmbreeScene::packets_supported() const { return impl_->masks && impl_->tri_geom != RTC_INVALID_GEOMETRY_ID; }
 
+namespace {
+// A ray's origin and direction as floats, rounded as make_rayhit rounds them.
+void float_ray(const Vec3& o, const Vec3& d, float* r) {
+    r[0] = static_cast<float>(o.x);
+    r[1] = static_cast<float>(o.y);
+    r[2] = static_cast<float>(o.z);
+    r[3] = static_cast<float>(d.x);
+    r[4] = static_cast<float>(d.y);
+    r[5] = static_cast<float>(d.z);
+}
+}  // namespace
+
 template <class Rays>
 void EmbreeScene::packet_query(int n, Candidate* out, const PacketSkip* skip, const Rays& ray) const {
     if (n < 0 || n > kPacket) throw std::invalid_argument("EmbreeScene::intersect_packet: more rays than a packet holds");
@@ -282,14 +294,7 @@ void EmbreeScene::packet_query(int n, Candidate* out, const PacketSkip* skip, co
 }
 
 void EmbreeScene::intersect_packet(const Vec3* o, const Vec3* d, int n, Candidate* out, const PacketSkip* skip) const {
-    packet_query(n, out, skip, [&](int i, float* r) {
-        r[0] = static_cast<float>(o[i].x);
-        r[1] = static_cast<float>(o[i].y);
-        r[2] = static_cast<float>(o[i].z);
-        r[3] = static_cast<float>(d[i].x);
-        r[4] = static_cast<float>(d[i].y);
-        r[5] = static_cast<float>(d[i].z);
-    });
+    packet_query(n, out, skip, [&](int i, float* r) { float_ray(o[i], d[i], r); });
 }
 
 void EmbreeScene::intersect_packet(const RayLanes& rays, const int* lanes, int n, Candidate* out,
@@ -309,35 +314,38 @@ void EmbreeScene::intersect_coherent(const Vec3* o, const Vec3* d, int n, Candid
     // A counting sort of the rays by octant, as Embree forms it from the float direction's signs
     // (any grouping gives the same answers; this one gives full packets).
     int small[256];
+    unsigned char small_octant[256];
     std::vector<int> large;
+    std::vector<unsigned char> large_octant;
     int* order = small;
+    unsigned char* octant = small_octant;
     if (n > 256) {
         large.resize(static_cast<size_t>(n));
+        large_octant.resize(static_cast<size_t>(n));
         order = large.data();
+        octant = large_octant.data();
     }
     int start[9] = {};
-    const auto octant = [&](int i) {
-        return (static_cast<float>(d[i].x) < 0.0f ? 1 : 0) | (static_cast<float>(d[i].y) < 0.0f ? 2 : 0) |
-               (static_cast<float>(d[i].z) < 0.0f ? 4 : 0);
-    };
-    for (int i = 0; i < n; ++i) ++start[octant(i) + 1];
+    for (int i = 0; i < n; ++i) {
+        octant[i] = static_cast<unsigned char>((static_cast<float>(d[i].x) < 0.0f ? 1 : 0) |
+                                               (static_cast<float>(d[i].y) < 0.0f ? 2 : 0) |
+                                               (static_cast<float>(d[i].z) < 0.0f ? 4 : 0));
+        ++start[octant[i] + 1];
+    }
     for (int k = 0; k < 8; ++k) start[k + 1] += start[k];
     int fill[8];
     std::copy(start, start + 8, fill);
-    for (int i = 0; i < n; ++i) order[fill[octant(i)]++] = i;
+    for (int i = 0; i < n; ++i) order[fill[octant[i]]++] = i;
     // Whole packets of one octant first, then the octants' remainders pooled into packets.
-    Vec3 po[kPacket], pd[kPacket];
     Candidate pc[kPacket];
     int lane_ray[kPacket];
     int m = 0;
     const auto flush = [&] {
-        intersect_packet(po, pd, m, pc);
+        packet_query(m, pc, nullptr, [&](int i, float* r) { float_ray(o[lane_ray[i]], d[lane_ray[i]], r); });
         for (int j = 0; j < m; ++j) out[lane_ray[j]] = pc[j];
         m = 0;
     };
     const auto add = [&](int i) {
-        po[m] = o[i];
-        pd[m] = d[i];
         lane_ray[m++] = i;
         if (m == kPacket) flush();
     };
