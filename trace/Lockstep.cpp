@@ -9,14 +9,16 @@
 //  - the analytic representation solves the object's patches for all lanes at once in SIMD
 //    (trace/Lanes.h), as do the interactions of every representation: Fresnel, Snell's law and
 //    the spawn of the next ray.
-// Tracing them side by side changes nothing any path computes. Each lane's arithmetic is the
-// scalar tracer's, operation for operation (Lanes.h says how); a lane the SIMD step does not
-// cover (an ellipsoid near the segment, a rim hit, a miss inside the glass, total absorption,
-// Russian roulette, anything not finite) takes the scalar step (propagate, interact) for that
-// segment or interaction. Each path draws from its own stream (rngs[i]) in its own order, and
-// counts into its own PathStats; those are summed after the packet in sample order: their integers
-// in any order, and their weight sums exactly as one path after another adds to them, since each
-// path adds to each at most once (lockstep() holds only without absorption in the glass, whose
+// Tracing them side by side changes nothing any path computes. Each lane's arithmetic is the scalar
+// tracer's, operation for operation (Lanes.h says how); a lane the SIMD step does not cover (an
+// ellipsoid near the segment, a rim hit, a miss inside the glass, total absorption, Russian
+// roulette, anything not finite) takes the scalar step (propagate, interact) for that segment or
+// interaction (sample_lockstep; mesh-only's own loop, sample_mesh_lockstep at the end of this file,
+// sends such a lane off to run alone). Each path draws from its own stream (rngs[i]) in its own
+// order, and counts into its own PathStats (mesh-only: the packet's counters once, each path's
+// weight sums lane by lane); those are summed after the packet in sample order: their integers in
+// any order, and their weight sums exactly as one path after another adds to them, since each path
+// adds to each at most once (lockstep() holds only without absorption in the glass, whose
 // Beer-Lambert share is added on every segment). tests/trace_packets.cpp compares every branch and
 // counter with the paths traced one at a time, bit for bit; tests/trace_lanes.cpp every SIMD twin
 // with its scalar function.
@@ -396,7 +398,7 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
 // where they read it: no Tracer::Hit or Tracer::State per lane, nothing copied between stages
 // but the hit (perf: writing and reading those records was most of sample_lockstep's own time
 // for mesh-only). Lane i is path i throughout; the kernels go through every lane, the ended ones
-// included (their values stay finite or are ignored, as the padding lanes'). A lane whose step
+// included (what they compute there is never read, as for the padding lanes). A lane whose step
 // the kernels do not cover leaves the lockstep for good: its state becomes a State and the path
 // runs on alone (run), which is what it computes in the lockstep too (tests/trace_packets.cpp).
 void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* directions, Rng* rngs, PathStats& stats,
@@ -409,11 +411,18 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
     bool skip[kPacket];
     Medium medium[kPacket];
     int depth[kPacket], defect[kPacket], choices[kPacket];
-    PathStats lane[kPacket];
-    // The lanes that left the lockstep, with their states (constructed as they leave).
+    // The packet's counts, and each path's additions to the weight sums, which are summed in
+    // sample order after the packet, as one path after another adds to them (each adds to each
+    // at most once: lockstep()).
+    PathStats counts;
+    double display_w[kPacket] = {}, lost_w[kPacket] = {};
+    // The lanes that left the lockstep, with their states and their own counts (constructed as
+    // they leave).
     bool alone[kPacket];
     alignas(State) unsigned char alone_storage[kPacket * sizeof(State)];
     State* const alone_st = reinterpret_cast<State*>(alone_storage);
+    alignas(PathStats) unsigned char alone_counts[kPacket * sizeof(PathStats)];
+    PathStats* const alone_stats = reinterpret_cast<PathStats*>(alone_counts);
     const lanes::Kernels& kernels = lanes::kernels();
     const int count = kernels.count(n);
     for (int i = 0; i < count; ++i) {  // lanes past n repeat the first: finite, ignored
@@ -447,10 +456,12 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
         last_o[i] = a.o.get(i);
         last_d[i] = a.d.get(i);
     };
-    // Lane i as a State (escaped is false: an escaped path ends in the lockstep), to go on alone.
+    // Lane i as a State (escaped is false: an escaped path ends in the lockstep), to go on alone
+    // from here: run(leave(i), &rngs[i], alone_stats[i], ...).
     const auto leave = [&](int i) -> State& {
         alone[i] = true;
         rngs[i] = Rng::from_state(a.state[i], a.inc[i]);
+        new (&alone_stats[i]) PathStats;
         State* st = new (&alone_st[i]) State;
         st->o = a.o.get(i);
         st->d = a.d.get(i);
@@ -467,8 +478,8 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
     // The segment's start (begin_segment): false where the depth limit truncates the path.
     const auto begin = [&](int i) {
         if (depth[i] < options_.max_depth) return true;
-        ++lane[i].truncated;
-        lane[i].lost_weight += weight[i];
+        ++counts.truncated;
+        lost_w[i] = weight[i];
         weight[i] = 0;
         return false;
     };
@@ -476,8 +487,8 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
     Candidate c[kPacket];
     int m = 0;
     for (int i = 0; i < n; ++i) {
-        ++lane[i].paths;
-        ++lane[i].packet_segments;
+        ++counts.paths;
+        ++counts.packet_segments;
         if (!begin(i)) {
             end(i);
             continue;
@@ -495,7 +506,7 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             const int i = ids[j];
             const Candidate& cj = c[j];
             if (!cj.hit) {  // interact: nothing ahead, the path leaves (branch_result looks for the display)
-                ++lane[i].segments;
+                ++counts.segments;
                 end(i);
                 continue;
             }
@@ -514,7 +525,7 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
                 h.d_in = d;
                 h.length = h.t;
                 h.n_from = n_from;
-                run<false>(leave(i), &rngs[i], lane[i], nullptr, nullptr, &h);
+                run<false>(leave(i), &rngs[i], alone_stats[i], nullptr, nullptr, &h);
                 continue;
             }
             if (defect[i] < 0) {  // as interact
@@ -541,7 +552,7 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             kernels.spawn(a, count, skip_floor);
             for (int j = 0; j < k; ++j) {
                 const int i = ids[j];
-                PathStats& ps = lane[i];
+                PathStats& ps = counts;
                 const LaneFace& f = *face[i];
                 if (a.tir[i]) ++ps.tir;
                 else ++choices[i];
@@ -576,7 +587,7 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
         }
         if (m == 0) break;
         if (m < kMinLockstep) {  // alone from its segment's start
-            run<false>(leave(ids[0]), &rngs[ids[0]], lane[ids[0]], nullptr, nullptr);
+            run<false>(leave(ids[0]), &rngs[ids[0]], alone_stats[ids[0]], nullptr, nullptr);
             break;
         }
         EmbreeScene::PacketSkip skips;
@@ -585,13 +596,19 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             skips.prim[j] = skip_prim[i];
             skips.on[j] = skip[i];
             skips.until[j] = a.skip_until[i];
-            ++lane[i].packet_segments;
         }
+        counts.packet_segments += static_cast<std::uint64_t>(m);
         embree_->intersect_packet({a.o.x, a.o.y, a.o.z, a.d.x, a.d.y, a.d.z}, ids, m, c, &skips);
     }
+    double absorbed_w[kPacket] = {};
     for (int i = 0; i < n; ++i) {
         if (alone[i]) {
-            branch_result(alone_st[i], lane[i], out.emplace_back());
+            PathStats& as = alone_stats[i];
+            branch_result(alone_st[i], as, out.emplace_back());
+            counts.add_counters(&as, 1);
+            display_w[i] = as.display_weight;
+            lost_w[i] = as.lost_weight;
+            absorbed_w[i] = as.absorbed_weight;
         } else {
             State st;
             st.o = last_o[i];
@@ -599,11 +616,18 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             st.weight = weight[i];
             st.defect = defect[i];
             st.random_choices = choices[i];
-            branch_result(st, lane[i], out.emplace_back());
+            branch_result(st, counts, display_w[i], out.emplace_back());
         }
         ends[i] = out.size();
     }
-    stats.merge_in_order(lane, n);
+    // As merge_in_order of the paths' own counts: the counters in any order, each weight sum path
+    // after path.
+    stats.add_counters(&counts, 1);
+    for (int i = 0; i < n; ++i) {
+        stats.display_weight += display_w[i];
+        stats.lost_weight += lost_w[i];
+        stats.absorbed_weight += absorbed_w[i];
+    }
 }
 
 }  // namespace ltm

@@ -84,18 +84,21 @@ struct PathStats {
     void merge(const PathStats& o);
     // merge(p[0]), ..., merge(p[n - 1]), in that order.
     void merge_in_order(const PathStats* p, int n);
+    // The counters of p[0 .. n) added to these (the weight sums left as they are).
+    void add_counters(const PathStats* p, int n);
 };
 
 // The counters are PathStats' first kCounters members, all std::uint64_t, and the three weight
 // sums follow them: the counters merge as one array (vector adds, not 29 named ones: the lockstep
 // tracer merges its 16 paths' counts after every packet; perf), the sums by name.
-inline void PathStats::merge_in_order(const PathStats* p, int n) {
+inline void PathStats::add_counters(const PathStats* p, int n) {
     constexpr std::size_t kCounters = offsetof(PathStats, display_weight) / sizeof(std::uint64_t);
     static_assert(std::is_standard_layout_v<PathStats> && std::is_trivially_copyable_v<PathStats>);
     static_assert(kCounters == 29 && offsetof(PathStats, display_weight) == kCounters * sizeof(std::uint64_t) &&
                       sizeof(PathStats) == offsetof(PathStats, display_weight) + 3 * sizeof(double),
                   "a new PathStats field: a counter goes with the others (std::uint64_t, before the weight "
-                  "sums; then update kCounters here), a weight sum after them (then add it below)");
+                  "sums; then update kCounters here), a weight sum after them (then add it to merge_in_order and "
+                  "to sample_mesh_lockstep's sums)");
     std::uint64_t sum[kCounters];
     std::memcpy(sum, this, sizeof sum);
     for (int i = 0; i < n; ++i) {
@@ -104,6 +107,10 @@ inline void PathStats::merge_in_order(const PathStats* p, int n) {
         for (std::size_t k = 0; k < kCounters; ++k) sum[k] += c[k];
     }
     std::memcpy(this, sum, sizeof sum);
+}
+
+inline void PathStats::merge_in_order(const PathStats* p, int n) {
+    add_counters(p, n);
     // One path after another: the same sums, to the bit, as n calls of merge.
     for (int i = 0; i < n; ++i) {
         display_weight += p[i].display_weight;
@@ -314,6 +321,8 @@ private:
     // Where an ended branch lands on the display (weight 0 or off the display: pixel -1), written
     // into a default PathResult r (TracerState.h).
     void branch_result(const State& st, PathStats& stats, PathResult& r) const;
+    // The same, its display weight added to display_weight instead of stats.display_weight.
+    void branch_result(const State& st, PathStats& stats, double& display_weight, PathResult& r) const;
     // The index of medium m at point x (a field's local value).
     double index_at(Medium m, const Vec3& x) const;
 

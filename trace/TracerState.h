@@ -145,6 +145,9 @@ inline bool Tracer::mesh_clear_ahead(std::uint32_t prim, const Vec3& o, const Ve
 // Where an ended branch lands on the display (weight 0 or off the display: pixel -1), written
 // into r, a PathResult as constructed (the caller's emplace_back: written where it stays).
 inline void Tracer::branch_result(const State& st, PathStats& stats, PathResult& r) const {
+    branch_result(st, stats, stats.display_weight, r);
+}
+inline void Tracer::branch_result(const State& st, PathStats& stats, double& display_weight, PathResult& r) const {
     ++stats.branches;
     r.defect = st.defect;
     r.random_choices = st.random_choices;
@@ -160,7 +163,7 @@ inline void Tracer::branch_result(const State& st, PathStats& stats, PathResult&
         return;
     }
     ++stats.on_display;
-    stats.display_weight += st.weight;
+    display_weight += st.weight;
     r.pixel = l;
     r.weight = st.weight;
 }
