@@ -301,12 +301,7 @@ void EmbreeScene::intersect_packet(const RayLanes& rays, const int* lanes, int n
                                    const PacketSkip* skip) const {
     packet_query(n, out, skip, [&](int i, float* r) {
         const int k = lanes[i];
-        r[0] = static_cast<float>(rays.ox[k]);
-        r[1] = static_cast<float>(rays.oy[k]);
-        r[2] = static_cast<float>(rays.oz[k]);
-        r[3] = static_cast<float>(rays.dx[k]);
-        r[4] = static_cast<float>(rays.dy[k]);
-        r[5] = static_cast<float>(rays.dz[k]);
+        float_ray({rays.ox[k], rays.oy[k], rays.oz[k]}, {rays.dx[k], rays.dy[k], rays.dz[k]}, r);
     });
 }
 

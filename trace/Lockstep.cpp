@@ -552,19 +552,18 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             kernels.spawn(a, count, skip_floor);
             for (int j = 0; j < k; ++j) {
                 const int i = ids[j];
-                PathStats& ps = counts;
                 const LaneFace& f = *face[i];
-                if (a.tir[i]) ++ps.tir;
+                if (a.tir[i]) ++counts.tir;
                 else ++choices[i];
-                ++ps.segments;
+                ++counts.segments;
                 if (a.reflect[i]) {
-                    if (!a.tir[i]) ++ps.reflections;
+                    if (!a.tir[i]) ++counts.reflections;
                 } else {
                     medium[i] = f.to;
-                    ++ps.transmissions;
+                    ++counts.transmissions;
                 }
                 if (!a.finite[i]) {  // spawn's check
-                    ++ps.nan_events;
+                    ++counts.nan_events;
                     weight[i] = 0;
                     end(i);
                     continue;
@@ -578,7 +577,7 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
                     continue;
                 }
                 if (mesh_clear_ahead(skip_prim[i], a.o.get(i), a.d.get(i))) {
-                    ++ps.segments;
+                    ++counts.segments;
                     end(i);
                     continue;
                 }
