@@ -284,3 +284,68 @@ TEST(Packets, CoherentQueriesGiveEachRayItsOwnAnswer) {
     }
     EXPECT_GT(hits, 300);  // most rays meet the lens or a defect's shell: the answers are not all misses
 }
+
+// EmbreeScene::intersect_packet's skip list, traced with the filter on every hit or (rare, as the
+// mesh-only lockstep asks) without it and again with it for the rays that met their skipped
+// facet: either way each ray gets the single query's answer with the same skip list of one.
+// Rays aimed at a facet's centroid from 1e-4 mm before it, in all directions: with the facet
+// skipped within 1e-3 mm the answer must lie beyond it (the facet met first, then traced again);
+// within 1e-5 mm the facet itself is the answer; unskipped rays see it too. Batches of every
+// size from one to a whole packet.
+TEST(Packets, SkippedFacetsAreSkippedWithOrWithoutTheFilterOnEveryHit) {
+    const Built b = build(kLens);
+    const Tracer t = make(b, Representation::MeshOnly);
+    const EmbreeScene& e = t.embree();
+    const TriMesh& mesh = b.solid.mesh;
+    Rng rng(11, 12, 13);
+    constexpr int kRays = 400;
+    std::vector<Vec3> o, d;
+    std::vector<std::uint32_t> facet;
+    std::vector<double> until;
+    std::vector<bool> on;
+    for (int i = 0; i < kRays; ++i) {
+        const auto f = static_cast<std::uint32_t>(rng.uniform() * static_cast<double>(mesh.num_triangles()));
+        const auto& tri = mesh.triangles[f];
+        const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) * (1.0 / 3);
+        const Vec3 dir = normalize(Vec3{2 * rng.uniform() - 1, 2 * rng.uniform() - 1, 2 * rng.uniform() - 1});
+        o.push_back(c - dir * 1e-4);
+        d.push_back(dir);
+        facet.push_back(f);
+        until.push_back(i % 3 == 0 ? 1e-3 : 1e-5);
+        on.push_back(i % 3 != 2);
+    }
+    long skipped = 0, kept = 0;
+    for (bool rare : {false, true})
+        for (int n : {1, 5, EmbreeScene::kPacket}) {
+            for (int s = 0; s + n <= kRays; s += n) {
+                EmbreeScene::PacketSkip skip;
+                skip.rare = rare;
+                for (int j = 0; j < n; ++j) {
+                    skip.prim[j] = facet[static_cast<size_t>(s + j)];
+                    skip.on[j] = on[static_cast<size_t>(s + j)];
+                    skip.until[j] = until[static_cast<size_t>(s + j)];
+                }
+                Candidate got[EmbreeScene::kPacket];
+                e.intersect_packet(&o[static_cast<size_t>(s)], &d[static_cast<size_t>(s)], n, got, &skip);
+                for (int j = 0; j < n; ++j) {
+                    const auto i = static_cast<size_t>(s + j);
+                    const Candidate want = on[i] ? e.intersect(o[i], d[i], 0.0, INFINITY, &facet[i], 1, until[i])
+                                                 : e.intersect(o[i], d[i], 0.0, INFINITY);
+                    const Candidate& c = got[j];
+                    ASSERT_EQ(c.hit, want.hit) << "rare " << rare << " batch " << n << " ray " << i;
+                    if (!want.hit) continue;
+                    EXPECT_EQ(c.prim, want.prim) << "rare " << rare << " batch " << n << " ray " << i;
+                    EXPECT_TRUE(same_bits(c.t, want.t)) << "rare " << rare << " batch " << n << " ray " << i;
+                    if (on[i] && until[i] > 1e-4) {
+                        EXPECT_NE(c.prim, facet[i]) << "ray " << i;  // skipped: the answer lies beyond
+                        ++skipped;
+                    } else if (c.prim == facet[i]) {
+                        ++kept;
+                    }
+                }
+            }
+        }
+    // Both ways were taken: facets met and skipped (for rare: traced again), and facets answered.
+    EXPECT_GT(skipped, 100);
+    EXPECT_GT(kept, 200);
+}

@@ -241,10 +241,11 @@ void EmbreeScene::packet_query(int n, Candidate* out, const PacketSkip* skip, co
     RTCIntersectContext& ctx = pc.ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    const bool filter_first = skip && !skip->rare;
     if (skip) {
         pc.skip = skip;
         pc.n = static_cast<unsigned>(n);
-        ctx.filter = packet_skip_filter;
+        if (filter_first) ctx.filter = packet_skip_filter;
     }
     alignas(64) int valid[kPacket];
     alignas(64) RTCRayHit16 rh;
@@ -281,6 +282,27 @@ void EmbreeScene::packet_query(int n, Candidate* out, const PacketSkip* skip, co
         rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect16(valid, impl_->scene, &ctx, &rh);
+    // A rare skip list, without a filter on every hit of every ray: a ray whose answer is not its
+    // skipped facet within the band has the filtered query's answer already (the filter rejects
+    // that facet alone, and the facet lies no nearer than the answer); the rays that did meet it
+    // are traced again with the filter, in one packet of their own.
+    if (skip && !filter_first) {
+        bool again = false;
+        for (int i = 0; i < kPacket; ++i) {
+            const bool self = i < n && skip->on[i] && rh.hit.geomID[i] == impl_->tri_geom &&
+                              rh.hit.primID[i] == skip->prim[i] && rh.ray.tfar[i] < skip->until[i];
+            valid[i] = self ? -1 : 0;
+            again |= self;
+            if (self) {
+                rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+                rh.hit.geomID[i] = rh.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+            }
+        }
+        if (again) {
+            ctx.filter = packet_skip_filter;
+            rtcIntersect16(valid, impl_->scene, &ctx, &rh);
+        }
+    }
     for (int i = 0; i < n; ++i) {
         Candidate c;
         if (rh.hit.geomID[i] == impl_->tri_geom) {

@@ -590,6 +590,7 @@ void Tracer::sample_mesh_lockstep(int n, const Vec3* origins, const Vec3* direct
             break;
         }
         EmbreeScene::PacketSkip skips;
+        skips.rare = true;  // spawn's offset clears the facet (mesh_only_offset)
         for (int j = 0; j < m; ++j) {
             const int i = ids[j];
             skips.prim[j] = skip_prim[i];
