@@ -290,8 +290,8 @@ TEST(Packets, CoherentQueriesGiveEachRayItsOwnAnswer) {
 // facet: either way each ray gets the single query's answer with the same skip list of one.
 // Rays aimed at a facet's centroid from 1e-4 mm before it, in all directions: with the facet
 // skipped within 1e-3 mm the answer must lie beyond it (the facet met first, then traced again);
-// within 1e-5 mm the facet itself is the answer; unskipped rays see it too. Batches of every
-// size from one to a whole packet.
+// within 1e-5 mm the facet itself is the answer; unskipped rays see it too. Batches of one ray,
+// of five (a partial packet) and of a whole packet.
 TEST(Packets, SkippedFacetsAreSkippedWithOrWithoutTheFilterOnEveryHit) {
     const Built b = build(kLens);
     const Tracer t = make(b, Representation::MeshOnly);

@@ -288,9 +288,9 @@ void EmbreeScene::packet_query(int n, Candidate* out, const PacketSkip* skip, co
     // are traced again with the filter, in one packet of their own.
     if (skip && !filter_first) {
         bool again = false;
-        for (int i = 0; i < kPacket; ++i) {
-            const bool self = i < n && skip->on[i] && rh.hit.geomID[i] == impl_->tri_geom &&
-                              rh.hit.primID[i] == skip->prim[i] && rh.ray.tfar[i] < skip->until[i];
+        for (int i = 0; i < n; ++i) {  // the lanes past n are invalid already
+            const bool self = skip->on[i] && rh.hit.geomID[i] == impl_->tri_geom && rh.hit.primID[i] == skip->prim[i] &&
+                              rh.ray.tfar[i] < skip->until[i];
             valid[i] = self ? -1 : 0;
             again |= self;
             if (self) {
