@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
     const int threads = args.threads, reps = args.reps;
     const long samples = args.samples;
     const std::string out = args.out;
-    const fs::path specs = fs::path(LTM_SOURCE_DIR) / "scenes" / "datasets";
+    const fs::path specs = fs::path(bench::source_dir()) / "scenes" / "datasets";
     const std::string mixed = read(specs / "paper-mixed.yaml");
     const std::vector<std::pair<std::string, std::string>> cases = {
         {"enclosed", read(specs / "paper-enclosed.yaml")},
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
     // bare rtcIntersect1 calls on its triangle mesh, on the same threads.
     double bare = 0;
     {
-        const Scene scene = load_scene((fs::path(LTM_SOURCE_DIR) / "scenes" / "default.yaml").string());
+        const Scene scene = load_scene((fs::path(bench::source_dir()) / "scenes" / "default.yaml").string());
         const Scene free = defect_free(scene);
         const Solid solid = build_solid(free, nullptr, /*surfaces_only=*/false);
         TracerOptions a, m;

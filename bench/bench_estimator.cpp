@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
     std::printf("variance across --reps renders with independent streams, averaged over the pixels;\n"
                 "seconds: median render time; ratio: (var x s) / (var x s of the sample estimator)\n");
     run_scene("defect-free (scenes/paper/defect-free.yaml)",
-              load_scene(std::string(LTM_SOURCE_DIR) + "/scenes/paper/defect-free.yaml"), args);
+              load_scene(bench::source_dir() + "/scenes/paper/defect-free.yaml"), args);
     run_scene("bubbles (bench_trace's paper scene)", parse_scene(bench::paper_scene(100, 64), "bench_estimator"), args);
     return 0;
 }

@@ -50,7 +50,7 @@ Setup setup(const std::string& yaml) {
 }
 Setup load(const std::string& file) {
     Setup s;
-    s.scene = load_scene(std::string(LTM_SOURCE_DIR) + "/" + file);
+    s.scene = load_scene(bench::source_dir() + "/" + file);
     const double t0 = now();
     s.solid = build_solid(s.scene);
     s.build_seconds = now() - t0;

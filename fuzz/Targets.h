@@ -26,11 +26,12 @@
 #include "study/DatasetSpec.h"
 #include "trace/RaysFile.h"
 
-#ifndef LTM_SOURCE_DIR
-#error "LTM_SOURCE_DIR must name the source folder (the dataset target resolves the shipped scenes)"
-#endif
-
 namespace ltm::fuzz {
+
+// The checkout's root folder, absolute: the dataset target resolves the shipped scenes from it.
+// Defined by the program that links the targets (fuzz/CMakeLists.txt generates it for the fuzzers;
+// tests/fuzz_regressions.cpp gives the tests' own).
+const std::string& source_dir();
 
 // The bytes as a string.
 inline std::string text(const std::uint8_t* data, std::size_t size) {
@@ -95,7 +96,7 @@ inline void image(const std::uint8_t* data, std::size_t size) {
 // scenes/datasets/, so that the seeds' relative `scene:` paths reach the shipped base scenes.
 inline void dataset_spec(const std::uint8_t* data, std::size_t size) {
     try {
-        (void)parse_dataset_spec(text(data, size), LTM_SOURCE_DIR "/scenes/datasets/fuzz.yaml");
+        (void)parse_dataset_spec(text(data, size), source_dir() + "/scenes/datasets/fuzz.yaml");
     } catch (const InputError&) {
     }
 }

@@ -1,12 +1,13 @@
 // Shared helpers of the tests that run the ltmsim executable (tests/app_*.cpp): running a command
 // with its exit status and output, reading and writing whole files, a fresh temporary folder per
 // test, and the message of an expected exception. Header-only (inline), with no dependency on the
-// project's libraries, so any test may include it: all but the command helpers also serve tests of
-// other layers.
+// project's libraries (only on ltm_test_paths, which every test links), so any test may include it:
+// all but the command helpers also serve tests of other layers.
 //
-// The executable is the one CMake builds for this tree: its path is the macro LTMSIM_EXE, which
-// tests/CMakeLists.txt defines for every test executable.
+// The executable is the one CMake builds for this tree: ltm::test::ltmsim_exe() (tests/BuildPaths.h).
 #pragma once
+
+#include "tests/BuildPaths.h"
 
 #include <gtest/gtest.h>
 
@@ -124,11 +125,11 @@ inline Outcome run_shell(const std::string& command, const std::filesystem::path
     return r;
 }
 
-// Runs `ltmsim <args>` (the executable LTMSIM_EXE) as run_shell does. `args` go through the shell:
+// Runs `ltmsim <args>` (the executable ltmsim_exe()) as run_shell does. `args` go through the shell:
 // quote paths that may hold spaces.
 inline Outcome ltmsim(const std::string& args, const std::filesystem::path& dir,
                       Capture what = Capture::StdoutAndStderr) {
-    return run_shell(std::string(LTMSIM_EXE) + " " + args, dir, what);
+    return run_shell(ltm::test::ltmsim_exe() + " " + args, dir, what);
 }
 
 // ---- a temporary folder per test -------------------------------------------------------------

@@ -138,6 +138,7 @@ display: {resolution: [100, 100], size: [100.0, 100.0], z: 60.0}
     const fs::path out = dir / "killed";
     std::mt19937 g(2024);
     int kills = 0;
+    const std::string exe = ltm::test::ltmsim_exe(), s = (dir / "spec.yaml").string(), o = out.string();
     for (int round = 0; round < 12; ++round) {
         const pid_t pid = ::fork();
         ASSERT_GE(pid, 0);
@@ -145,8 +146,7 @@ display: {resolution: [100, 100], size: [100.0, 100.0], z: 60.0}
             const int null = ::open("/dev/null", O_WRONLY);
             ::dup2(null, 1);
             ::dup2(null, 2);
-            const std::string s = (dir / "spec.yaml").string(), o = out.string();
-            ::execl(LTMSIM_EXE, LTMSIM_EXE, "dataset", s.c_str(), "-o", o.c_str(), "--resume", "--threads", "2", nullptr);
+            ::execl(exe.c_str(), exe.c_str(), "dataset", s.c_str(), "-o", o.c_str(), "--resume", "--threads", "2", nullptr);
             ::_exit(127);
         }
         const double at = std::uniform_real_distribution<double>(0.05, 0.7)(g) * span_ms;
@@ -344,7 +344,7 @@ assert 0 < train < n, train
 print("ok", n, len(ids))
 )PY");
     const auto r = ltm::test::run_shell("/usr/bin/python3 " + q(dir / "check.py") + " " + q(dir / "full") + " " +
-                                            q(fs::path(LTM_SOURCE_DIR) / "scripts"),
+                                            q(fs::path(ltm::test::source_dir()) / "scripts"),
                                         dir);
     EXPECT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_EQ(r.out.rfind("ok 8", 0), 0u) << r.out;
@@ -378,11 +378,11 @@ TEST_F(Dataset, TheSlurmArrayScriptShardsTheDatasetAsOneRun) {
     // scripts/dataset-slurm.sh run as Slurm runs an array of 3 tasks numbered from 5: the
     // variables Slurm sets, the executable in LTMSIM.
     const auto full = whole("full");
-    const std::string script = (fs::path(LTM_SOURCE_DIR) / "scripts" / "dataset-slurm.sh").string();
+    const std::string script = (fs::path(ltm::test::source_dir()) / "scripts" / "dataset-slurm.sh").string();
     for (int task : {6, 5, 7}) {
         const auto r = ltm::test::run_shell(
             "SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " SLURM_ARRAY_TASK_MIN=5 SLURM_ARRAY_TASK_COUNT=3 "
-                "SLURM_CPUS_PER_TASK=1 LTMSIM=" LTMSIM_EXE " bash " + q(script) + " " + q(dir / "spec.yaml") + " " +
+                "SLURM_CPUS_PER_TASK=1 LTMSIM=" + ltm::test::ltmsim_exe() + " bash " + q(script) + " " + q(dir / "spec.yaml") + " " +
                 q(dir / "slurm"),
             dir);
         ASSERT_EQ(r.status, 0) << task << r.out << r.err;

@@ -39,7 +39,7 @@ TEST(PaperExperiment, ScatterFeaturesBeatTheBrightFieldOnTheSmallestBubbles) {
     // and stderr together), both kept when the test fails.
     const fs::path work = ltm::test::make_test_dir();
     const fs::path out = work / "out";
-    const std::string cmd = std::string(LTMSIM_EXE) + " experiment " + LTM_SOURCE_DIR + "/scenes/paper -o " + out.string() +
+    const std::string cmd = ltm::test::ltmsim_exe() + " experiment " + ltm::test::source_dir() + "/scenes/paper -o " + out.string() +
                             " > " + (work / "experiment.log").string() + " 2>&1";
     ASSERT_EQ(ltm::test::exit_status(std::system(cmd.c_str())), 0) << cmd;
     ASSERT_TRUE(fs::exists(out / "contrast.md"));

@@ -26,7 +26,7 @@ Outcome ltmsim(const std::string& args, const fs::path& dir) { return ltm::test:
 
 class MeshCommand : public ltm::test::TempDirTest {
 protected:
-    std::string scene(const std::string& rel) { return std::string(LTM_SOURCE_DIR) + "/scenes/" + rel; }
+    std::string scene(const std::string& rel) { return ltm::test::source_dir() + "/scenes/" + rel; }
     // Everything in dir except the files the test made itself.
     std::vector<std::string> outputs() {
         std::vector<std::string> names;

@@ -551,7 +551,7 @@ TEST_F(RenderCommand, OutputThatIsAFile) {
 TEST_F(RenderCommand, AnalyticRepresentationOfAPitIsRefused) {
     // scenes/examples/pit.yaml: a surface-breaking bubble cuts the front face; the analytic
     // representation only handles defects that neither touch a face nor each other.
-    const std::string pit = std::string(LTM_SOURCE_DIR) + "/scenes/examples/pit.yaml";
+    const std::string pit = ltm::test::source_dir() + "/scenes/examples/pit.yaml";
     const fs::path out = dir / "out";
     const Outcome r = ltmsim(render(pit, out, "--representation analytic"), dir);
     EXPECT_EQ(r.status, 2);

@@ -527,7 +527,7 @@ TEST_F(TraceRaysCommand, MissingRaysFileOrBadSceneExitTwo) {
     EXPECT_NE(r.err.find("object.diametre"), std::string::npos) << r.err;
 
     // The analytic representation is refused for a surface-breaking defect, with the reason.
-    const std::string pit = std::string(LTM_SOURCE_DIR) + "/scenes/examples/pit.yaml";
+    const std::string pit = ltm::test::source_dir() + "/scenes/examples/pit.yaml";
     r = trace(pit, rays, "--representation analytic");
     EXPECT_EQ(r.status, 2);
     EXPECT_EQ(r.out, "");

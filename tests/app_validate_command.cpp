@@ -37,7 +37,7 @@ protected:
         EXPECT_EQ(verdict.find("FAILED"), std::string::npos) << r.out;
         EXPECT_NE(r.out.find("mesh-only", mesh), std::string::npos) << r.out;
     }
-    static std::string source(const std::string& rel) { return std::string(LTM_SOURCE_DIR) + "/scenes/" + rel; }
+    static std::string source(const std::string& rel) { return ltm::test::source_dir() + "/scenes/" + rel; }
 };
 
 // The default scene (the paper's lens with three bubbles) scaled by s: every length (radii,

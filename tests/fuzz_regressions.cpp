@@ -13,6 +13,8 @@
 
 namespace fs = std::filesystem;
 
+const std::string& ltm::fuzz::source_dir() { return ltm::test::source_dir(); }
+
 namespace {
 
 using Target = std::function<void(const std::uint8_t*, std::size_t)>;
@@ -38,7 +40,7 @@ void replay(const std::string& target, const fs::path& folder) {
 }  // namespace
 
 TEST(FuzzRegressions, FoundInputsAndSeedsAreHandled) {
-    const fs::path src(LTM_SOURCE_DIR);
+    const fs::path src(ltm::test::source_dir());
     for (const auto& [name, target] : targets()) replay(name, src / "fuzz" / "regressions" / name);
     replay("rays", src / "fuzz" / "seeds" / "rays");
     replay("dataset_spec", src / "scenes" / "datasets");

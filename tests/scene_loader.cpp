@@ -12,12 +12,13 @@
 #include <string>
 
 #include "scene/SceneLoader.h"
+#include "tests/BuildPaths.h"
 #include "tests/Tolerances.h"
 
 namespace ltm {
 namespace {
 
-const std::string kSourceDir = LTM_SOURCE_DIR;
+const std::string kSourceDir = ltm::test::source_dir();
 
 // A valid double-convex lens, lines 1-7.
 const std::string kLens =

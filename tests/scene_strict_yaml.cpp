@@ -14,6 +14,7 @@
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "scene/StrictYaml.h"
+#include "tests/BuildPaths.h"
 
 namespace ltm {
 namespace {
@@ -116,7 +117,7 @@ TEST(StrictYaml, DocumentsAreNamedByTheirKind) {
 }
 
 TEST(StrictYaml, UnreadableFile) {
-    const std::string missing = std::string(LTM_SOURCE_DIR) + "/scenes/no-such-spec.yaml";
+    const std::string missing = ltm::test::source_dir() + "/scenes/no-such-spec.yaml";
     try {
         yaml::load_document(missing, "dataset spec");
         FAIL() << "expected an InputError";

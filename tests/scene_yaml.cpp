@@ -22,11 +22,12 @@
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneYaml.h"
+#include "tests/BuildPaths.h"
 
 namespace ltm {
 namespace {
 
-const std::string kSourceDir = LTM_SOURCE_DIR;
+const std::string kSourceDir = ltm::test::source_dir();
 
 // ---------------------------------------------------------------------------------------------
 // Field-by-field comparison. Every field of Scene and of the structs it holds is listed here; a

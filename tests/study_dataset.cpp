@@ -18,6 +18,7 @@
 #include "study/Coco.h"
 #include "study/DatasetSpec.h"
 #include "study/Sampler.h"
+#include "tests/BuildPaths.h"
 #include "tests/Tolerances.h"
 
 using namespace ltm;
@@ -307,7 +308,7 @@ TEST(CocoRle, CountsAndStringsFollowMaskApi) {
 
 TEST(DatasetSpec, EveryShippedSpecLoadsAndCanBeMet) {
     int specs = 0;
-    for (const auto& e : std::filesystem::directory_iterator(std::string(LTM_SOURCE_DIR) + "/scenes/datasets")) {
+    for (const auto& e : std::filesystem::directory_iterator(ltm::test::source_dir() + "/scenes/datasets")) {
         if (e.path().extension() != ".yaml") continue;
         ++specs;
         const DatasetSpec s = load_dataset_spec(e.path().string());

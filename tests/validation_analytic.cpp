@@ -8,6 +8,7 @@
 #include <string>
 
 #include "scene/SceneLoader.h"
+#include "tests/BuildPaths.h"
 #include "tests/Tolerances.h"
 #include "validation/AnalyticScene.h"
 #include "validation/ValidationRays.h"
@@ -35,7 +36,7 @@ Scene window_scene(double t, double D, double n, const std::string& extra = "", 
     return parse_scene(y, "test.yaml");
 }
 
-Scene example(const std::string& name) { return load_scene(std::string(LTM_SOURCE_DIR) + "/scenes/" + name); }
+Scene example(const std::string& name) { return load_scene(ltm::test::source_dir() + "/scenes/" + name); }
 
 void expect_vec_near(const Vec3& a, const Vec3& b, double tol, const std::string& what = "") {
     EXPECT_LE(distance(a, b), tol) << what << ": (" << a.x << ", " << a.y << ", " << a.z << ") vs (" << b.x
