@@ -4,10 +4,10 @@
 
 #include "io/Pages.h"
 
-#include <cairo-ft.h>
 #include <cairo.h>
 #include <ft2build.h>
 #include FT_FREETYPE_H
+#include FT_OUTLINE_H
 #include <emmintrin.h>  // SSE2: colour_range
 #include <tmmintrin.h>  // SSSE3: png_row_codes
 
@@ -18,9 +18,12 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <mutex>
+#include <shared_mutex>
 #include <stdexcept>
 #include <tuple>
 #include <type_traits>
+#include <unordered_map>
 
 namespace ltm {
 
@@ -146,27 +149,175 @@ struct FreeTypeLibrary {
     FreeTypeLibrary& operator=(const FreeTypeLibrary&) = delete;
 };
 
-// kFontFile as a Cairo font face, made once and kept for the life of the process, with the
-// FreeType face and library under it (held by function-local statics, so still reachable at exit:
-// LeakSanitizer reported the library as leaked while only a lambda's local pointed to it). Cairo
-// serialises its own use of the FT_Face, so figures may be drawn from several threads.
-cairo_font_face_t* font_face() {
-    static FreeTypeLibrary* const library = new FreeTypeLibrary();
-    static cairo_font_face_t* const face = [] {
-        FT_Face ft = open_face(library->library, kFontFile);
-        cairo_font_face_t* f = cairo_ft_font_face_create_for_ft_face(ft, 0);
-        if (cairo_font_face_status(f) != CAIRO_STATUS_SUCCESS)
-            throw std::runtime_error(font_error(kFontFile, std::string("Cairo cannot use it: ") +
-                                                               cairo_status_to_string(cairo_font_face_status(f))));
-        return f;
-    }();
-    return face;
+// A point of a glyph's outline, in ems (x right, y up from the baseline, at the glyph's origin).
+struct OutlinePoint {
+    double x = 0, y = 0;
+};
+
+// One drawing step of an outline: move to, line to, or a cubic Bezier through two control points
+// to an end point (TrueType's quadratic curves are raised to cubics exactly).
+struct OutlineStep {
+    enum Kind : std::uint8_t { Move, Line, Cubic } kind = Move;
+    OutlinePoint c1, c2, to;  // c1, c2: control points of a Cubic
+};
+
+struct Glyph {
+    double advance = 0;  // ems
+    std::vector<OutlineStep> outline;
+};
+
+// Text is drawn as the font's glyph outlines, filled by Cairo like any other path: a Font holds
+// them, read through FreeType from the font file, and text never goes through Cairo's own text
+// API. That API keeps process-wide mutable state (a font face's scaled fonts in one font map,
+// shared by every thread that draws at the same size), and Cairo 1.16 (Debian 12) races on it:
+// cairo_scaled_font_destroy drops a reference before it takes the font map's lock and then
+// asserts that the font's glyph cache is not frozen, while another thread may meanwhile have
+// found the font in the map and frozen its cache to draw ("Assertion `! scaled_font->cache_frozen'
+// failed", an abort in about one render in a thousand whose previews were drawn in parallel).
+//
+// Glyphs are read on first use and kept for the life of the process: a glyph, once in the table,
+// never changes or moves (std::unordered_map keeps its elements in place), so drawing threads read
+// it under a shared lock and use it after releasing that lock; the FreeType face is touched only
+// under the exclusive lock, by the one thread adding a glyph. Outlines are unhinted, in font units
+// scaled to ems (FT_LOAD_NO_SCALE); metrics are rounded to whole pixels as FreeType rounds a
+// sized face's (advances to the nearest pixel, ascent and descent up), so that a label's baseline
+// and the next glyph's origin fall on pixel boundaries.
+class Font {
+public:
+    explicit Font(const std::string& path) : face_(open_face(library_.library, path)) {
+        if (!FT_IS_SCALABLE(face_) || face_->units_per_EM == 0) {
+            FT_Done_Face(face_);
+            throw std::runtime_error(font_error(path, "not a scalable (outline) font"));
+        }
+        const double em = face_->units_per_EM;
+        ascent_ = face_->ascender / em;
+        descent_ = -face_->descender / em;
+    }
+    ~Font() { FT_Done_Face(face_); }
+    Font(const Font&) = delete;
+    Font& operator=(const Font&) = delete;
+
+    // The whole-pixel ascent above the baseline and line height (ascent + descent) at `size`.
+    int ascent(double size) const { return static_cast<int>(std::ceil(ascent_ * size)); }
+    int line_height(double size) const { return ascent(size) + static_cast<int>(std::ceil(descent_ * size)); }
+
+    // The advance of one glyph at `size`, whole pixels.
+    static double advance(const Glyph& g, double size) { return std::round(g.advance * size); }
+
+    // The glyphs of a UTF-8 text, in order (a malformed byte counts as U+FFFD; a character the
+    // font lacks is its .notdef glyph, a box).
+    std::vector<const Glyph*> glyphs(const std::string& text) {
+        std::vector<const Glyph*> out;
+        for (std::size_t i = 0; i < text.size();) out.push_back(&glyph(next_code_point(text, i)));
+        return out;
+    }
+
+    double width(const std::string& text, double size) {
+        double w = 0;
+        for (const Glyph* g : glyphs(text)) w += advance(*g, size);
+        return w;
+    }
+
+private:
+    static char32_t next_code_point(const std::string& s, std::size_t& i) {
+        const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+        const unsigned char b = byte(i);
+        const int n = b < 0x80 ? 0 : (b >> 5) == 0x6 ? 1 : (b >> 4) == 0xE ? 2 : (b >> 3) == 0x1E ? 3 : -1;
+        if (n < 0 || i + static_cast<std::size_t>(n) >= s.size()) {  // not a lead byte, or cut short
+            ++i;
+            return 0xFFFD;
+        }
+        char32_t c = n == 0 ? b : n == 1 ? (b & 0x1F) : n == 2 ? (b & 0x0F) : (b & 0x07);
+        for (int k = 1; k <= n; ++k) {
+            if ((byte(i + static_cast<std::size_t>(k)) & 0xC0) != 0x80) {
+                ++i;
+                return 0xFFFD;
+            }
+            c = (c << 6) | (byte(i + static_cast<std::size_t>(k)) & 0x3F);
+        }
+        i += static_cast<std::size_t>(n) + 1;
+        return c;
+    }
+
+    const Glyph& glyph(char32_t c) {
+        {
+            std::shared_lock<std::shared_mutex> read(lock_);
+            const auto it = glyphs_.find(c);
+            if (it != glyphs_.end()) return it->second;
+        }
+        std::unique_lock<std::shared_mutex> write(lock_);
+        const auto it = glyphs_.find(c);  // another thread may have added it meanwhile
+        if (it != glyphs_.end()) return it->second;
+        return glyphs_.emplace(c, load(c)).first->second;
+    }
+
+    // The outline and advance of the glyph for code point c (under the exclusive lock).
+    Glyph load(char32_t c) {
+        Glyph g;
+        const FT_UInt index = FT_Get_Char_Index(face_, c);  // 0, .notdef, where the font lacks c
+        if (FT_Load_Glyph(face_, index, FT_LOAD_NO_SCALE | FT_LOAD_NO_HINTING | FT_LOAD_NO_BITMAP) != 0 ||
+            face_->glyph->format != FT_GLYPH_FORMAT_OUTLINE)
+            return g;  // nothing to draw, no advance
+        const double em = face_->units_per_EM;
+        g.advance = face_->glyph->advance.x / em;
+        struct Sink {
+            Glyph& g;
+            double em;
+            OutlinePoint at;  // the current point
+            OutlinePoint p(const FT_Vector* v) const { return {v->x / em, v->y / em}; }
+        } sink{g, em, {}};
+        FT_Outline_Funcs funcs{};
+        funcs.move_to = [](const FT_Vector* to, void* u) {
+            Sink& k = *static_cast<Sink*>(u);
+            k.at = k.p(to);
+            k.g.outline.push_back({OutlineStep::Move, {}, {}, k.at});
+            return 0;
+        };
+        funcs.line_to = [](const FT_Vector* to, void* u) {
+            Sink& k = *static_cast<Sink*>(u);
+            k.at = k.p(to);
+            k.g.outline.push_back({OutlineStep::Line, {}, {}, k.at});
+            return 0;
+        };
+        // A quadratic Bezier (p0, q, p1) is the cubic (p0, p0 + 2/3 (q - p0), p1 + 2/3 (q - p1), p1).
+        funcs.conic_to = [](const FT_Vector* control, const FT_Vector* to, void* u) {
+            Sink& k = *static_cast<Sink*>(u);
+            const OutlinePoint q = k.p(control), p1 = k.p(to), p0 = k.at;
+            k.g.outline.push_back({OutlineStep::Cubic,
+                                   {p0.x + 2.0 / 3.0 * (q.x - p0.x), p0.y + 2.0 / 3.0 * (q.y - p0.y)},
+                                   {p1.x + 2.0 / 3.0 * (q.x - p1.x), p1.y + 2.0 / 3.0 * (q.y - p1.y)},
+                                   p1});
+            k.at = p1;
+            return 0;
+        };
+        funcs.cubic_to = [](const FT_Vector* c1, const FT_Vector* c2, const FT_Vector* to, void* u) {
+            Sink& k = *static_cast<Sink*>(u);
+            k.at = k.p(to);
+            k.g.outline.push_back({OutlineStep::Cubic, k.p(c1), k.p(c2), k.at});
+            return 0;
+        };
+        if (FT_Outline_Decompose(&face_->glyph->outline, &funcs, &sink) != 0) g.outline.clear();
+        return g;
+    }
+
+    FreeTypeLibrary library_;
+    FT_Face face_ = nullptr;
+    double ascent_ = 0, descent_ = 0;  // ems
+    std::shared_mutex lock_;
+    std::unordered_map<char32_t, Glyph> glyphs_;
+};
+
+// kFontFile's Font, made on first use and kept for the life of the process (never destroyed, so
+// still reachable at exit: a function-local static pointer).
+Font& font() {
+    static Font* const f = new Font(kFontFile);
+    return *f;
 }
 
 // ---- drawing ----
 
-// A white RGB canvas with a Cairo context: antialiased lines and text (grey-scale antialiasing,
-// slight hinting, metrics rounded to whole pixels; fixed here, not taken from the machine).
+// A white RGB canvas with a Cairo context: antialiased lines, and text as filled glyph outlines
+// (Font above: unhinted outlines, metrics rounded to whole pixels; nothing taken from the machine).
 // Memory a caller keeps for pictures it draws again and again (the previews of every render):
 // every page of a fresh picture costs a page fault, about 10 us on a virtual machine, which was a
 // quarter of the default scene's write stage (perf). A Canvas given one draws into `surface`.
@@ -259,13 +410,6 @@ public:
             throw std::runtime_error("Cairo: cannot make a " + std::to_string(width) + " x " + std::to_string(height) +
                                      " canvas: " + why);
         }
-        cairo_font_options_t* o = cairo_font_options_create();
-        cairo_font_options_set_antialias(o, CAIRO_ANTIALIAS_GRAY);
-        cairo_font_options_set_hint_style(o, CAIRO_HINT_STYLE_SLIGHT);
-        cairo_font_options_set_hint_metrics(o, CAIRO_HINT_METRICS_ON);
-        cairo_set_font_options(cr_, o);
-        cairo_font_options_destroy(o);
-        cairo_set_font_face(cr_, font_face());
         cairo_set_source_rgb(cr_, 1, 1, 1);
         cairo_paint(cr_);
         cairo_set_line_width(cr_, 1.0);
@@ -278,19 +422,9 @@ public:
     Canvas(const Canvas&) = delete;
     Canvas& operator=(const Canvas&) = delete;
 
-    double width_of(const std::string& text, double size) {
-        cairo_set_font_size(cr_, size);
-        cairo_text_extents_t e;
-        cairo_text_extents(cr_, text.c_str(), &e);
-        return e.x_advance;
-    }
-    // ascent, line height (ascent + descent rounded up)
-    std::pair<double, int> line(double size) {
-        cairo_set_font_size(cr_, size);
-        cairo_font_extents_t e;
-        cairo_font_extents(cr_, &e);
-        return {e.ascent, static_cast<int>(std::ceil(e.ascent + e.descent))};
-    }
+    double width_of(const std::string& text, double size) { return font().width(text, size); }
+    // ascent, line height (ascent + descent), whole pixels
+    std::pair<double, int> line(double size) { return {font().ascent(size), font().line_height(size)}; }
     Label label(const std::string& text, double size, bool vertical = false) {
         Label l;
         l.text = text;
@@ -303,6 +437,9 @@ public:
         return l;
     }
 
+    // The label's glyph outlines as one path, filled with the non-zero winding rule (TrueType's),
+    // antialiased: the pen starts at the box's left end on the baseline, `ascent` below its top
+    // (for a vertical label the same in a frame turned a quarter turn counter-clockwise).
     void draw(const Label& l, const Rgb& colour = kBlack) {
         if (l.text.empty()) return;
         const double ascent = line(l.size).first;
@@ -311,11 +448,27 @@ public:
         if (l.vertical) {
             cairo_translate(cr_, l.box.x + ascent, l.box.y + l.box.h);
             cairo_rotate(cr_, -std::acos(0.0));  // a quarter turn counter-clockwise
-            cairo_move_to(cr_, 0, 0);
         } else {
-            cairo_move_to(cr_, l.box.x, l.box.y + ascent);
+            cairo_translate(cr_, l.box.x, l.box.y + ascent);
         }
-        cairo_show_text(cr_, l.text.c_str());
+        cairo_new_path(cr_);
+        double pen = 0;
+        const double s = l.size;
+        for (const Glyph* g : font().glyphs(l.text)) {
+            for (const OutlineStep& step : g->outline) {
+                const double x = pen + step.to.x * s, y = -step.to.y * s;  // y up in the font, down here
+                switch (step.kind) {
+                case OutlineStep::Move: cairo_move_to(cr_, x, y); break;
+                case OutlineStep::Line: cairo_line_to(cr_, x, y); break;
+                case OutlineStep::Cubic:
+                    cairo_curve_to(cr_, pen + step.c1.x * s, -step.c1.y * s, pen + step.c2.x * s, -step.c2.y * s, x, y);
+                    break;
+                }
+            }
+            pen += Font::advance(*g, s);
+        }
+        cairo_set_fill_rule(cr_, CAIRO_FILL_RULE_WINDING);
+        cairo_fill(cr_);
         cairo_restore(cr_);
     }
     // dash: 0 solid, 1 dashed (5 on, 3 off), 2 dotted (1 on, 3 off).
@@ -534,22 +687,15 @@ Rgb viridis(double t) {
 
 void require_font(const std::string& path) {
     if (path == kFontFile) {
-        font_face();
+        font();
         return;
     }
-    FreeTypeLibrary library;
-    FT_Done_Face(open_face(library.library, path));
+    Font checked(path);
 }
 
-double text_width(const std::string& text, double size) {
-    Canvas c(1, 1);
-    return c.width_of(text, size);
-}
+double text_width(const std::string& text, double size) { return font().width(text, size); }
 
-int text_height(double size) {
-    Canvas c(1, 1);
-    return c.line(size).second;
-}
+int text_height(double size) { return font().line_height(size); }
 
 // ---- ticks ----
 

@@ -1,9 +1,10 @@
 #pragma once
 // Pictures for people: feature images in a perceptually uniform colour map with a labelled colour
 // bar and axes in mm, montages of such pictures in a labelled grid, and histograms. Lines and
-// text are drawn with Cairo (antialiased), text in DejaVu Sans loaded from its file through
-// FreeType (kFontFile; no fontconfig lookup, so the machine's font configuration does not change
-// a figure). Data pixels are not drawn by Cairo: they are written into the picture afterwards,
+// text are drawn with Cairo (antialiased), text as the outlines of DejaVu Sans's glyphs, read from
+// its file through FreeType (kFontFile; no fontconfig lookup, so the machine's font configuration
+// does not change a figure) and filled as paths, not through Cairo's text API. Figures may be
+// drawn from any number of threads at once. Data pixels are not drawn by Cairo: they are written into the picture afterwards,
 // exact and nearest-neighbour, so a preview stays a faithful picture of the data. Everything here
 // produces an RGB Image (io/Image.h: 3 channels, values in [0, 1], row 0 on top) that write_png
 // writes (atomically) as an 8-bit PNG; write_pseudo_colour_png draws the same picture straight
@@ -57,8 +58,9 @@ constexpr double kTickFontSize = 12;   // tick labels
 // kFontFile (once per process; the face is then kept).
 void require_font(const std::string& path = kFontFile);
 
-// A text's box at a font size: width = its advance (pixels, not rounded), height = the font's
-// ascent + descent rounded up (the same for every text of that size: a line). A label drawn in a
+// A text's box at a font size: width = its advance (the sum of its glyphs' advances, each rounded
+// to whole pixels), height = the font's ascent and descent, each rounded up to whole pixels (the
+// same for every text of that size: a line). A label drawn in a
 // box has its baseline `ascent` below the box's top; its ink stays inside the box (up to the
 // antialiasing fringe of about a pixel at the left and right ends).
 double text_width(const std::string& text, double size);
