@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -897,11 +898,11 @@ TEST(LinePlot, SizeColoursAndBadSeries) {
 
 // ---- figures from many threads ----
 
-// Runs body(t, j) for j = t, t + 1, ... on `threads` threads at once until `seconds` have passed,
+// Runs body(t, j) on thread t for j = t, t + 1, ..., `threads` threads at once, until `seconds` have passed,
 // each thread paused at random instructions every few hundred microseconds (tests/Preemption.h);
 // body returns false for a result unlike the one drawn alone. Bounded by time, not by a count,
 // so that it weighs the same under the sanitizers.
-void from_many_threads(int threads, double seconds, const std::function<bool(int)>& body) {
+void from_many_threads(int threads, double seconds, const std::function<bool(int, int)>& body) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     std::vector<std::vector<int>> mismatches(static_cast<std::size_t>(threads));
     std::vector<long> done(static_cast<std::size_t>(threads), 0);
@@ -911,7 +912,7 @@ void from_many_threads(int threads, double seconds, const std::function<bool(int
             const ltm::test::ScopedPreemption preempt(std::chrono::microseconds(300 + 7 * t), std::chrono::microseconds(30));
             for (int j = t; std::chrono::steady_clock::now() < end; ++j) {
                 ++done[static_cast<std::size_t>(t)];
-                if (!body(j)) mismatches[static_cast<std::size_t>(t)].push_back(j);
+                if (!body(t, j)) mismatches[static_cast<std::size_t>(t)].push_back(j);
             }
         });
     for (auto& th : pool) th.join();
@@ -936,7 +937,7 @@ int many_threads() { return std::max(16, 8 * static_cast<int>(std::thread::hardw
 // which aborted about one render in a thousand.
 TEST(PlotThreads, TextMeasuredFromManyThreadsAtOnceIsTheSameAsAlone) {
     const double alone[2] = {ltm::text_width("x", 10), ltm::text_width("x", 11)};
-    from_many_threads(8, 4.0, [&](int j) { return ltm::text_width("x", 10 + j % 2) == alone[j % 2]; });
+    from_many_threads(8, 4.0, [&](int, int j) { return ltm::text_width("x", 10 + j % 2) == alone[j % 2]; });
 }
 
 // Whole figures (titles, tick and axis labels, vertical labels) drawn from many threads at once
@@ -952,9 +953,34 @@ TEST(PlotThreads, FiguresDrawnFromManyThreadsAtOnceAreTheSameAsDrawnAlone) {
     constexpr int kFigures = 12;
     std::vector<Image> alone;
     for (int i = 0; i < kFigures; ++i) alone.push_back(draw(i));
-    from_many_threads(many_threads(), 2.0, [&](int j) {
+    from_many_threads(many_threads(), 2.0, [&](int, int j) {
         const Image f = draw(j % kFigures);
         const Image& a = alone[static_cast<std::size_t>(j % kFigures)];
         return f.width == a.width && f.height == a.height && f.data == a.data;
     });
+}
+
+// The previews as a render writes them in parallel (app/FeatureOutputs.cpp): PNG files drawn in a
+// thread's own picture memory, deflated with the thread's own igzip state and written atomically;
+// written from many threads at once they are the same bytes as written alone. Pictures below and
+// above kPreviewTableCells cells, so both colour paths run.
+TEST(PlotThreads, PreviewPngsWrittenFromManyThreadsAtOnceAreTheSameBytes) {
+    const fs::path dir = fs::temp_directory_path() / ("ltm_plot_threads_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const auto write = [&](int i, const std::string& name) {
+        const int w = i % 2 ? 400 : 30, h = i % 2 ? 350 : 20;  // 140000 cells (the table) or 600
+        const fs::path file = dir / name;
+        ltm::write_pseudo_colour_png(file.string(), ramp(w, h), w, h, "BrightField " + std::to_string(i), 0.0, 1.0,
+                                     1 + i % 2, {5, 2.5});
+        std::ifstream in(file, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    constexpr int kPreviews = 4;
+    std::vector<std::string> alone;
+    for (int i = 0; i < kPreviews; ++i) alone.push_back(write(i, "alone-" + std::to_string(i) + ".png"));
+    from_many_threads(many_threads(), 2.0, [&](int t, int j) {
+        const int i = j % kPreviews;
+        return write(i, "thread-" + std::to_string(t) + ".png") == alone[static_cast<std::size_t>(i)];
+    });
+    fs::remove_all(dir);
 }
