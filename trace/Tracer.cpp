@@ -1066,4 +1066,10 @@ void Tracer::sample_paths_from(const Vec3& origin, const Vec3& direction, Rng& r
     }
 }
 
+// The instances trace/Lockstep.cpp calls, which sees only their declarations: emitted here
+// explicitly, since an instance this file inlines everywhere need not otherwise be emitted at all
+// (an optimised build without link-time optimization then fails to link).
+template void Tracer::run<false>(State&, Rng*, PathStats&, PrincipalPath*, SplitStack*, const Hit*) const;
+template bool Tracer::interact<false>(State&, const Hit&, Rng*, PathStats&, PrincipalPath*, SplitStack*) const;
+
 }  // namespace ltm
