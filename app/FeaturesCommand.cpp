@@ -209,7 +209,8 @@ void add_features_command(CLI::App& app) {
     cmd->add_option("--threshold", args->options.threshold, "ScatterCount/Width count entries above this (default 0)");
     cmd->add_option("--energy-fraction", args->options.energy_fraction,
                     "Robust features keep the smallest set of display pixels holding this fraction (default 0.99)");
-    cmd->add_option("--dark-block", args->options.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
+    cmd->add_option("--dark-block", args->options.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)")
+        ->check(whole_number(0, kMaxInt));
     cmd->add_option("--pattern", args->patterns,
                     "A display pattern (PNG or EXR image) or a stack of them (.npy, float32/64, shape (K, P, Q)); "
                     "repeatable. One image: pattern.exr (channel Image) with the camera image y = T x; otherwise "
@@ -217,7 +218,7 @@ void add_features_command(CLI::App& app) {
         ->expected(1)
         ->allow_extra_args(false)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores)");
     cmd->callback([args] { run_guarded("features", args->threads, [&] { return run(*args); }); });
 }
 
