@@ -457,7 +457,7 @@ InputError malformed(const YAML::Exception& e, const std::string& text, const st
 YAML::Node parse_document(const std::string& text, const std::string& file, const std::string& kind) {
     // The documents are counted first. yaml-cpp 0.7 never consumes a ',' outside a flow
     // collection: YAML::LoadAll(",") returns empty document after empty document until memory
-    // runs out (found by fuzz/fuzz_scene). A document that starts where the previous one started
+    // runs out (fuzz/fuzz_scene reaches it). A document that starts where the previous one started
     // made no progress, and is reported as the stray character it is.
     DocumentStarts docs;
     try {

@@ -245,7 +245,7 @@ TEST(InlineScene, WithoutPrefixThePathsOfAFile) {
 }  // namespace ltm
 
 // yaml-cpp 0.7 loops forever on a ',' outside a flow collection (YAML::LoadAll(",") returns empty
-// documents until memory runs out; found by fuzz/fuzz_scene). It is a located error instead.
+// documents until memory runs out; fuzz/fuzz_scene reaches it). Here it is a located error.
 TEST(StrictYaml, AStrayCommaIsAnErrorNotAHang) {
     for (const char* text : {",", "# c\n\n  ,\n", ", ,"}) {
         SCOPED_TRACE(text);
