@@ -381,15 +381,11 @@ void add_acquire_command(CLI::App& app) {
     cmd->add_option("dir", args->dir, "A folder written by ltmsim render (ltm.npz, run.json)")->required();
     cmd->add_option("--method", args->method, "gray | stripes | compressive | brute-force | fields (default gray)")
         ->check(CLI::IsMember({"gray", "stripes", "compressive", "brute-force", "fields"}));
-    cmd->add_option("--patterns", args->patterns, "The number of patterns K; several values run a sweep")
-        ->required()
-        ->expected(1, 64)
-        ->check(whole_number(1, kMaxInt));
+    cmd->add_option("--patterns", args->patterns, "The number of patterns K; several values run a sweep")->required()->expected(1, 64);
     cmd->add_option("--sensor", args->sensor, "A YAML file with a sensor section (default: the documented camera and LCD)");
     cmd->add_option("--family", args->family, "compressive: bernoulli | hadamard (default bernoulli)")
         ->check(CLI::IsMember({"bernoulli", "hadamard"}));
-    cmd->add_option("--stripe-width", args->stripe_width, "compressive: width of the screening stripes (default 8)")
-        ->check(whole_number(1, kMaxInt));
+    cmd->add_option("--stripe-width", args->stripe_width, "compressive: width of the screening stripes (default 8)");
     cmd->add_option("--period", args->period, "gray: phase-shift period in display pixels (default 16)");
     cmd->add_option("--sigmas", args->sigmas, "Detection threshold in noise standard deviations (default 5)");
     cmd->add_option("-o,--output", args->out, "Output folder (default DIR/acquire-METHOD)");
