@@ -389,7 +389,7 @@ void add_acquire_command(CLI::App& app) {
     cmd->add_option("--period", args->period, "gray: phase-shift period in display pixels (default 16)");
     cmd->add_option("--sigmas", args->sigmas, "Detection threshold in noise standard deviations (default 5)");
     cmd->add_option("-o,--output", args->out, "Output folder (default DIR/acquire-METHOD)");
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores)");
     cmd->add_flag("--noise-free", args->noise_free, "No camera noise or quantisation: the decoders' own error");
     cmd->add_flag("--verbose", args->verbose, "Print each K's simulation and decoding time");
     cmd->add_flag("--overwrite", args->overwrite, "Replace an existing output folder");

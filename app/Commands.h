@@ -18,6 +18,18 @@ void add_experiment_command(CLI::App& app);
 void add_dataset_command(CLI::App& app);
 void add_acquire_command(CLI::App& app);
 
+// A check for an integer option, stated in words: "--threads: expected a whole number >= 1, or 0
+// for all cores; got '-1'". CLI11's own checks do not serve: NonNegativeNumber prints its bound,
+// the largest double, in 309 digits, and a double range lets 1.5 or 1e10 through to a conversion
+// that fails with "Could not convert". The value must be decimal digits with an optional sign, in
+// [min, max]; `zero_means` (with min = 0) names what 0 stands for ("all cores").
+CLI::Validator whole_number(int min, int max, const std::string& zero_means = "");
+// A non-negative int option's largest value.
+inline constexpr int kMaxInt = 2147483647;
+
+// --threads N, the same for every command that computes (0, the default: all cores).
+void add_threads_option(CLI::App* cmd, int& threads, const std::string& help);
+
 int exit_status();
 void set_exit_status(int status);
 

@@ -145,10 +145,9 @@ void add_dataset_command(CLI::App& app) {
     cmd->add_flag("--resume", args->resume, "Continue an interrupted run: keep verified samples, redo partial ones");
     cmd->add_flag("--fail-fast", args->fail_fast, "Stop at the first failed sample instead of logging it and going on");
     cmd->add_flag("--index", args->index, "Rebuild index.jsonl, annotations.json and README.md of the dataset folder");
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores); results do not depend on it")
-        ->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores); results do not depend on it");
     cmd->add_option("--jobs", args->jobs, "Samples rendered at once (default: threads + 1); results do not depend on it")
-        ->check(CLI::NonNegativeNumber);
+        ->check(whole_number(0, kMaxInt, "threads + 1"));
     cmd->callback([args] { run_guarded("dataset", args->threads, [&] { return run(*args); }); });
 }
 

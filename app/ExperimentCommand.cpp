@@ -89,7 +89,7 @@ void add_experiment_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("experiment", "Render an experiment's scenes; contrast tables and a montage");
     cmd->add_option("folder", args->folder, "A folder with experiment.yaml and its scenes")->required();
     cmd->add_option("-o,--output", args->out, "Output folder")->required();
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores)");
     cmd->add_flag("--overwrite", args->overwrite, "Replace earlier results in the output folder");
     cmd->callback([args] { run_guarded("experiment", args->threads, [&] { return run(*args); }); });
 }

@@ -1,7 +1,7 @@
 // `ltmsim features DIR`: recomputes DIR/features.exr and DIR/features/*.png from DIR/ltm.npz
 // (and DIR/reference.exr for the deflection map) without tracing; with --pattern also the camera
 // images y = T x of display patterns:
-//   --pattern IMAGE (one PNG or EXR)      DIR/pattern.exr, channel "Image" (as it always was);
+//   --pattern IMAGE (one PNG or EXR)      DIR/pattern.exr, channel "Image";
 //   several --pattern, or any .npy stack  DIR/patterns.exr, one channel per pattern, and
 //                                         DIR/patterns.npz: "images" float32 (K, rows, columns),
 //                                         "names" (K,) bytes, in the order the patterns were given.
@@ -105,12 +105,12 @@ std::vector<Pattern> read_patterns(const std::vector<std::string>& files, const 
 }
 
 // The camera images of all patterns, Y = T X in one pass: X pixel-major (features/BlockProduct.h),
-// each image then rounded to float as pattern.exr always stored it.
+// each image then rounded to float as pattern.exr stores it.
 std::vector<std::vector<float>> camera_images(const CsrMatrix& T, std::vector<Pattern>& patterns, int threads) {
     const std::size_t K = patterns.size(), n = static_cast<std::size_t>(T.cols);
     // The transpose in tiles of kTile display pixels: a tile of X (kTile K floats, 16 kB for
     // K = 64) stays in cache while each pattern's run of it is read in order. Column by column
-    // over all of X, every store missed the cache: that was most of a K = 64 call's own time.
+    // over all of X, every store would miss the cache: most of a K = 64 call's own time.
     constexpr std::size_t kTile = 64;
     std::vector<float> X(n * K);
     for (std::size_t l0 = 0; l0 < n; l0 += kTile) {
@@ -187,8 +187,8 @@ int run(const FeaturesArgs& a) {
         std::cerr << "ltmsim features: " << e.what() << "\n";
         return 2;
     }
-    // One image file alone keeps its old output, DIR/pattern.exr with channel "Image"; anything
-    // else (several patterns, or a stack of any size) is a stack.
+    // One image file alone gives DIR/pattern.exr with channel "Image"; anything else (several
+    // patterns, or a stack of any size) is a stack.
     const bool single = patterns.size() == 1 && !patterns[0].from_stack;
     write_features(a.dir, T, g, a.options, reference ? &*reference : nullptr);
     if (patterns.empty()) return 0;
@@ -209,7 +209,8 @@ void add_features_command(CLI::App& app) {
     cmd->add_option("--threshold", args->options.threshold, "ScatterCount/Width count entries above this (default 0)");
     cmd->add_option("--energy-fraction", args->options.energy_fraction,
                     "Robust features keep the smallest set of display pixels holding this fraction (default 0.99)");
-    cmd->add_option("--dark-block", args->options.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
+    cmd->add_option("--dark-block", args->options.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)")
+        ->check(whole_number(0, kMaxInt));
     cmd->add_option("--pattern", args->patterns,
                     "A display pattern (PNG or EXR image) or a stack of them (.npy, float32/64, shape (K, P, Q)); "
                     "repeatable. One image: pattern.exr (channel Image) with the camera image y = T x; otherwise "
@@ -217,7 +218,7 @@ void add_features_command(CLI::App& app) {
         ->expected(1)
         ->allow_extra_args(false)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores)");
     cmd->callback([args] { run_guarded("features", args->threads, [&] { return run(*args); }); });
 }
 

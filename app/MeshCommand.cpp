@@ -146,8 +146,7 @@ void add_mesh_command(CLI::App& app) {
     cmd->add_flag("--ascii", args->ascii, "Write ASCII PLY");
     cmd->add_option("--stats", args->stats, "Also write stage times and sizes as JSON to this file");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
-    cmd->add_option("--threads", args->threads, "Threads (meshing is sequential; accepted for uniformity)")
-        ->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (meshing is sequential; accepted for uniformity)");
     cmd->callback([args] { run_guarded("mesh", args->threads, [&] { return run(*args); }); });
 }
 

@@ -219,12 +219,12 @@ void add_render_command(CLI::App& app) {
     cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
     cmd->add_option("-o,--output", args->dir, "Output folder (created if missing; its parent must exist)")->required();
     cmd->add_option("--pattern", args->pattern, "Render y = T x for this display pattern image (PNG or EXR) instead");
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores); results do not depend on it")
-        ->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores); results do not depend on it");
     add_representation_option(cmd, args->representation, {"auto", "refined", "analytic", "mesh-only"});
     cmd->add_flag("--no-robust", args->no_robust, "Embree's fast (non-watertight) traversal");
     add_estimator_options(cmd, args->estimator);
-    cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)");
+    cmd->add_option("--dark-block", args->features.dark_block, "DarkField: side of the centred block switched off, display pixels (default: 60, or the display's smaller side if less)")
+        ->check(whole_number(0, kMaxInt));
     CLI::Option* max_memory = cmd->add_option("--max-memory", args->max_memory,
                     "Budget for T in memory, GiB (default: half the physical memory); a larger T is traced in row blocks "
                     "and streamed to ltm.npz (features from the same blocks)");

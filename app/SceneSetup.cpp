@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <iostream>
 
+#include "app/Commands.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
 #include "study/SceneRun.h"
@@ -91,7 +92,7 @@ void add_estimator_options(CLI::App* cmd, EstimatorArgs& args) {
                     fmt::format("Fresnel interactions split per path, 0 to {} (default: the scene's tracing.split_depth, "
                                 "else {}); with --estimator split only",
                                 kMaxSplitDepth, kDefaultSplitDepth))
-        ->check(CLI::Range(0, kMaxSplitDepth));
+        ->check(whole_number(0, kMaxSplitDepth));
 }
 
 bool apply_estimator_options(const std::string& command, const EstimatorArgs& args, Scene& scene) {

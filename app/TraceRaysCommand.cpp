@@ -74,8 +74,7 @@ void add_trace_rays_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("trace-rays", "Trace given rays' principal paths (JSON lines in, JSON lines out)");
     cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
     cmd->add_option("--rays", args->rays, "Rays: one {\"origin\": [x,y,z], \"direction\": [dx,dy,dz]} per line")->required();
-    cmd->add_option("--threads", args->threads, "Threads (default: all cores); the output is in input order whatever the number")
-        ->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (default: all cores); the output is in input order whatever the number");
     add_representation_option(cmd, args->representation, {"auto", "refined", "analytic", "mesh-only"});
     cmd->callback([args] { run_guarded("trace-rays", args->threads, [&] { return run(*args); }); });
 }

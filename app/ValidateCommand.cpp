@@ -49,10 +49,9 @@ void add_validate_command(CLI::App& app) {
     auto args = std::make_shared<ValidateArgs>();
     CLI::App* cmd = app.add_subcommand("validate", "Check traced paths against analytic Snell's-law solutions");
     cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
-    cmd->add_option("--density", args->density, "Ray set density (1: ~200 rays)")->check(CLI::PositiveNumber);
+    cmd->add_option("--density", args->density, "Ray set density (1: ~200 rays)")->check(whole_number(1, kMaxInt));
     add_representation_option(cmd, args->representation, {"refined", "analytic"});
-    cmd->add_option("--threads", args->threads, "Threads (accepted for uniformity; rays are traced in order)")
-        ->check(CLI::NonNegativeNumber);
+    add_threads_option(cmd, args->threads, "Threads (accepted for uniformity; rays are traced in order)");
     cmd->callback([args] { run_guarded("validate", args->threads, [&] { return run(*args); }); });
 }
 

@@ -1,5 +1,5 @@
 #pragma once
-// Where a render's time goes, per path and per stage (issue 11, point 1), measured by replaying
+// Where a render's time goes, per path and per stage, measured by replaying
 // each stage's own work in isolation on one thread and comparing it with a one-thread render of
 // the same scene. The production code carries no timers: each stage is timed on the render's own
 // inputs, recorded from the render's own paths, and scaled to the render's counts.

@@ -1,4 +1,4 @@
-// Dataset throughput (issue 8): paper-scale samples (scenes/default.yaml: 100 x 100 camera,
+// Dataset throughput: paper-scale samples (scenes/default.yaml: 100 x 100 camera,
 // 500 x 500 display, 64 paths per pixel), previews off, on N threads (2 unless given):
 //   enclosed   scenes/datasets/paper-enclosed.yaml: 1-4 bubbles and particles, no Boolean;
 //   mixed      scenes/datasets/paper-mixed.yaml: 1-4 defects, scratches among them;

@@ -1,4 +1,4 @@
-// Error per second, not paths per second (issue 11, point 5): the sample estimator against the
+// Error per second, not paths per second: the sample estimator against the
 // split estimator (scene.tracing, docs/estimators.md) on the paper's lens.
 //
 // For each estimator, the scene is rendered --reps times with independent random streams

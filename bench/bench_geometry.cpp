@@ -1,4 +1,4 @@
-// Geometry benchmarks (issue 2): scene set-up of a defect-free lens (parse + mesh), and the
+// Geometry benchmarks: scene set-up of a defect-free lens (parse + mesh), and the
 // paper's lens with three bubbles and one scratch at the default tessellation.
 //   build/bench/bench_geometry --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>

@@ -1,4 +1,4 @@
-// Graded-index benchmarks (issue 7). Medians of repeated runs in one process, on this machine:
+// Graded-index benchmarks. Medians of repeated runs in one process, on this machine:
 //   a. closed-form GRIN paths against homogeneous ones of the same object, per thread: the
 //      Luneburg sphere against a homogeneous ball, a GRIN rod against a plain window, a general
 //      quadratic field against the plain lens (paths/s and the ratio);

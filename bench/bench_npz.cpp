@@ -1,7 +1,7 @@
 // Writing ltm.npz (io/LtmFile.h) at igzip levels 1, 2 and 3 (and 0, stored, for reference): the
 // file's size and the write time, median of --reps runs, for a real T. The figures behind the
 // default level chosen in io/LtmFile.h. For comparison, in the same run: zlib's level 1 (what
-// libzip deflated the entries with before io/Npz.cpp took igzip) deflating the same arrays,
+// libzip deflates entries with on its own) deflating the same arrays,
 // the deflate alone (no CRC, no file), which is a lower bound of a zlib write.
 //
 // Usage: bench_npz --ltm PATH/ltm.npz [--reps R] [--out DIR]

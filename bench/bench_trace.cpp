@@ -1,4 +1,4 @@
-// Tracing benchmarks (issue 3). Medians of repeated runs in one process, on this machine:
+// Tracing benchmarks. Medians of repeated runs in one process, on this machine:
 //   a. the paper scene (100 x 100 camera, 500 x 500 display, r1 = 50, r2 = -50, t = 6, D = 25 mm,
 //      three bubbles) at 256 samples per pixel: paths/s and ray segments/s, per representation;
 //   b. after each render of a, as many ray segments cast as bare rtcIntersect1 calls on the same
@@ -109,8 +109,8 @@ int main(int argc, char** argv) {
                     static_cast<unsigned long long>(segments), segs.size(),
                     double(segs.size()) / (double(paper_pixels) * spp), paper.solid.mesh.num_triangles(), raw_rate / 1e6,
                     bare_rates.size());
-        // The ratio table (issue 11's targets): each representation's segments per second over the
-        // bare rtcIntersect1 rate, same segments, same threads, same run.
+        // The ratio table: each representation's segments per second over the bare rtcIntersect1
+        // rate, same segments, same threads, same run, beside its target (docs/benchmarks.md).
         std::printf("ratio table: segments/s over bare rtcIntersect1, %d threads, this run\n", threads);
         std::printf("%-12s %12s %8s %10s %8s\n", "repr", "Msegments/s", "paired", "medians", "target");
         for (const Row& row : rows)

@@ -113,7 +113,7 @@ FeatureImages compute_features(const CsrMatrix& T, int camera_columns, int camer
 // MeanX and MeanY of the given rows of T only, as (x, y) pairs in the order of `rows`: the
 // values compute_features gives those rows with this threshold (the same arithmetic, shared), NaN
 // for a row with no entry above it. For a reference render that traced a few of the camera's
-// pixels: all channels of every pixel were 56 MB of fresh pages at industrial scale for the
+// pixels: all channels of every pixel would be 56 MB of fresh pages at industrial scale for the
 // two values of a few thousand rows. Throws std::invalid_argument unless T is a valid CSR matrix
 // (CsrMatrix::check) with P * Q columns, the display is as compute_features requires, the
 // threshold is finite and >= 0 and every row is one of T's.

@@ -803,10 +803,9 @@ std::pair<double, double> colour_range(const std::vector<float>& values, double 
     if (std::isinf(lo) || std::isinf(hi)) throw std::invalid_argument("colour range: lo and hi must be finite or NaN");
     if (std::isnan(lo) || std::isnan(hi)) {
         // In float, branch-free (the smallest and largest float are the same numbers as doubles):
-        // a preview of 10^6 pixels scans them all.
-        // Four running minima and maxima in SSE lanes (x86-64's baseline): a NaN or an infinity
+        // four running minima and maxima in SSE lanes (x86-64's baseline); a NaN or an infinity
         // stands in as +inf for the minimum and -inf for the maximum. A preview of 10^6 pixels
-        // scans them all; a scalar loop was a tenth of the industrial scene's preview time.
+        // scans them all, which a scalar loop makes a tenth of the industrial scene's preview time.
         constexpr float kBig = std::numeric_limits<float>::max(), kInf = std::numeric_limits<float>::infinity();
         const std::size_t n = values.size(), whole = n - n % 4;
         const float* const p = values.data();
@@ -970,11 +969,7 @@ void paint_cells(Image& img, const std::vector<float>& values, int width, int he
                       viridis((v - L.lo) / range));
         }
 }
-// The same cells in code values, the same codes as fill_rect's, computed row by row: a cell's code
-// once (and once for a run of equal values: feature maps hold long runs of counts and zeros), put
-// pixel_scale times across, and the finished pixel row copied pixel_scale - 1 times down. Cell by
-// cell through fill_rect this was half of the industrial scene's preview time (perf: 17 previews
-// of 1000 x 1000 cells, one fill_rect and one viridis a pixel).
+
 // viridis and png_code inlined, the same arithmetic, as one pixel word (pixel_word): t clamped,
 // s = 255 t, entry i = min(floor s, 254), f = s - i, each channel float(a + (b - a) f) of entries
 // i and i + 1 in double, then rounded to its code. (viridis returns entry i itself at f = 0 and
@@ -1008,7 +1003,8 @@ std::uint32_t viridis_word(double t) {
 }
 
 // viridis_word through a table of K = 2^14 buckets of t, for pictures of kPreviewTableCells cells
-// or more (the industrial scene's previews: 10^6 cells each, whose words were half of their time;
+// or more (the industrial scene's previews: 10^6 cells each, whose words computed one by one take
+// half of their time;
 // building the table costs 2 (K + 1) words, a third of a millisecond, once per process).
 //
 // Why it is exact: bucket b holds every t in [b / K, (b + 1) / K) (t K is exact, K being a power
@@ -1046,8 +1042,8 @@ private:
 // The same cells in code values, the same codes as fill_rect's, computed row by row: a cell's code
 // once (and once for a run of equal values: feature maps hold long runs of counts and zeros), put
 // pixel_scale times across, and the finished pixel row copied pixel_scale - 1 times down. Cell by
-// cell through fill_rect this was half of the industrial scene's preview time (perf: 17 previews
-// of 1000 x 1000 cells, one fill_rect and one viridis a pixel).
+// cell through fill_rect (one fill_rect and one viridis a pixel) the cells would take half of the
+// industrial scene's preview time (perf: 17 previews of 1000 x 1000 cells).
 void paint_cells(SurfacePicture& img, const std::vector<float>& values, int width, int height, const PseudoColourLayout& L,
                  int pixel_scale) {
     if (L.image_x < 0 || L.image_y < 0 || L.image_x + width * pixel_scale > img.width ||

@@ -61,18 +61,18 @@ namespace {
 // bench/bench_tetgen.cpp, and the lens of tests/geometry_tetmesh.cpp):
 //   p     the input is a piecewise linear complex (our boundary): mesh its inside;
 //   q1.4  Delaunay refinement to radius-edge ratio <= 1.4 (TetGen's default is 2.0). -q is what
-//         makes TetGen call tetunsuitable; 1.4 made 0.1% more tetrahedra than 2.0 in the same
+//         makes TetGen call tetunsuitable; 1.4 makes 0.1% more tetrahedra than 2.0 in the same
 //         time (1.14e6 at 1e-4), with the largest radius-edge ratio 5.4 instead of 6.2;
 //   M     no merging of nearly coplanar input triangles: by default TetGen treats neighbouring
-//         triangles within 0.1 degree of coplanar as one facet and retriangulates it, which moved
-//         the boundary of a lens (whose caps are nearly flat near the axis) and changed the meshed
+//         triangles within 0.1 degree of coplanar as one facet and retriangulates it, which moves
+//         the boundary of a lens (whose caps are nearly flat near the axis) and changes the meshed
 //         volume by 1e-4 mm^3 of 264; with -M every input triangle stays on the boundary (the
 //         volume agrees to rounding), at 15% more tetrahedra for that lens and none more for
 //         spheres. Very close vertices are not merged either; checked_boundary rejects them;
 //   n     output the neighbour list;  z  number everything from zero;  Q  quiet;
 //   S#    the Steiner point budget that enforces max_tets (kTetsPerSteinerPoint), appended.
 // TetGen's default mesh optimisation (-O2/7: flips, smoothing, vertex insertion and deletion) stays on: without it
-// (-O0) the same meshes had dihedral angles down to 0.06 degrees (slivers), with it none below
+// (-O0) the same meshes have dihedral angles down to 0.06 degrees (slivers), with it none below
 // 6 degrees, at the same count and 20% more time; the few tetrahedra it pushes back above the
 // tolerance are bisected afterwards.
 // Not -Y: the boundary triangles must be split where the criterion asks for tetrahedra smaller
@@ -93,7 +93,7 @@ constexpr double kRelativeTolerance = 1e-8;
 // the interior of any Delaunay mesh), so a budget of max_tets / 3 never stops a mesh that ends
 // within max_tets, and a mesh that exhausts it (and is refused) has about 2 max_tets tetrahedra.
 // Merely answering false in the callback does not stop TetGen soon enough: measured at the
-// tolerance 1e-5 of bench/bench_tetgen.cpp, it went on from 1.3e7 to 3.0e7 tetrahedra (6 GB)
+// tolerance 1e-5 of bench/bench_tetgen.cpp, it goes on from 1.3e7 to 3.0e7 tetrahedra (6 GB)
 // working through the splits already queued.
 constexpr double kTetsPerSteinerPoint = 3;
 

@@ -87,14 +87,14 @@ struct TetRegion {
 //    mode k of the error adds up as 1 / |k . d|. The rotation puts telecentric rays (along z) far
 //    from every such plane: z in the lattice frame is d = (0.1146, 0.4419, 0.8897), which
 //    minimises the resonance score of scripts/lattice-direction (9.14, at most 11.1 within 5
-//    degrees of z; the rotation used before, (37.3, 23.7, 11.1), scored 11.4 and 14.9). The
+//    degrees of z; the rotation (37.3, 23.7, 11.1), for comparison, scores 11.4 and 14.9). The
 //    rotation about z is immaterial for rays along z.
 //  * a path enters and leaves the lattice at a phase of its own: the end terms, which the tracer
 //    corrects in closed form (LatticePhase.h), given the lattice's frame and the field's Hessian.
 // Measured for the 2.5 mm, delta_n = 0.02 inclusion of scenes/examples/inclusion-smooth.yaml at
 // the tolerance 1e-4 (display 60 mm behind; rays on a 0.2 mm grid; bench/bench_grin.cpp e):
 // unstructured, 1.9 million tetrahedra, display errors 0.018 mm at most, 0.0037 mm on average;
-// the lattice without the bias correction, at the former rotation, 2.0 million, 0.0054 and
+// the lattice without the bias correction, at the rotation (37.3, 23.7, 11.1), 2.0 million, 0.0054 and
 // 0.0013 mm; with the correction (and the continued profile of defects/SolidBuilder.cpp) at this
 // rotation, 2.5 million, 0.0016 and 0.00034 mm; with the end correction as well, 4.8e-5 and
 // 1.1e-5 mm. BCC's Delaunay tetrahedra are congruent, with circumradius a sqrt(5) / 4, which is

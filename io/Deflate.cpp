@@ -144,7 +144,8 @@ Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::si
     const std::size_t room = std::min(limit - 1, kMax);
     unsigned char* const out_bytes = t.out.get(room);
     // Zeroed first: isal_deflate_stateless_init leaves part of the state as it was, and stack
-    // garbage there made a block's bytes depend on the calls before it (the dataset test).
+    // garbage there would make a block's bytes depend on the calls before it
+    // (tests/io_deflate.cpp, and the dataset's bytes whatever the threads).
     isal_zstream z{};
     isal_deflate_stateless_init(&z);
     z.level = static_cast<std::uint32_t>(level);

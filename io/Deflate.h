@@ -32,10 +32,11 @@ struct Deflated {
 
 // `in` deflated whole in the zlib format (RFC 1950: a 2-byte header, the deflate stream, then the
 // Adler-32 of `in`) at igzip level `level` (1..3), if that takes fewer than `limit` bytes; else
-// size 0. The bytes depend on `in`, `level` and `limit` (igzip adapts to the room it is given). The bytes are in a buffer the calling thread keeps and reuses: valid until its next call
-// of zlib_deflate. (A fresh buffer per call was a fifth of the default scene's write stage: every
-// new page costs a fault, about 10 us on a virtual machine.) Throws std::runtime_error if igzip
-// fails otherwise.
+// size 0. The bytes depend on `in`, `level` and `limit` (igzip adapts to the room it is given).
+// The bytes are in a buffer the calling thread keeps and reuses: valid until its next call of
+// zlib_deflate. (A fresh buffer per call would cost a fifth of the default scene's write stage:
+// every new page costs a fault, about 10 us on a virtual machine.) Throws std::runtime_error if
+// igzip fails otherwise.
 // At most kMaxDeflatePiece bytes in (std::invalid_argument beyond).
 inline constexpr std::size_t kMaxDeflatePiece = 0xFFFFFFFFu - (16u << 20);
 Deflated zlib_deflate(const unsigned char* in, std::size_t n, int level, std::size_t limit);

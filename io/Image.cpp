@@ -108,7 +108,7 @@ void png_read_fn(png_structp png, png_bytep out, png_size_t n) {
 //
 // A picture of up to kPngWholeBytes filtered bytes is laid out whole in a buffer the thread keeps
 // (io::thread_buffer) and deflated in one call (zlib_deflate): igzip's streaming deflate copies
-// every byte it is given into its history buffer first, which was a tenth of a preview's time
+// every byte it is given into its history buffer first, which costs a tenth of a preview's time
 // (perf, bench_features' BM_WriteFile/file:4). A larger picture is streamed a row at a time from
 // one line, so that its copy is never made (a 16-bit frame of a large camera).
 
@@ -116,8 +116,8 @@ void write_png_file(const std::string& path, int width, int height, int bit_dept
                     const std::function<void(int, std::uint8_t*)>& row, io::CommitGroup* group = nullptr) {
     // The limit: deflate's stored blocks need 5 bytes per 64 KiB and zlib 6 bytes of header and
     // Adler-32, but igzip's streaming deflate falls back to stored blocks only within one piece of
-    // input, and on random rows it was measured 0.065 % over the input: the room is n / 64 + 4 KiB
-    // over it, and costs nothing until written (io::ScratchBytes).
+    // input, and on random rows it writes 0.065 % over the input (measured): the room is n / 64 +
+    // 4 KiB over it, and costs nothing until written (io::ScratchBytes).
     const std::size_t n = (rowbytes + 1) * static_cast<std::size_t>(height);
     const std::size_t limit = n + n / 64 + 4096;
     io::Deflated z;
@@ -277,7 +277,7 @@ Channels read_exr_file(const std::string& path, int& width, int& height) {
         }
         if (count == 0) bad("it has no channels");
         // Checked before anything is allocated: the header alone declares the size, and a few
-        // corrupt bytes of it would otherwise ask for gigabytes (found by fuzz/fuzz_image).
+        // corrupt bytes of it would otherwise ask for gigabytes (fuzz/fuzz_image reaches this).
         if (w * h > kMaxImageValues / count)
             bad("it declares " + std::to_string(w) + " x " + std::to_string(h) + " pixels in " + std::to_string(count) +
                 " channels, more than the " + std::to_string(kMaxImageValues) + " values an image may hold");
@@ -333,7 +333,7 @@ void put_le32(std::string& out, std::uint32_t v) {
 
 // OpenEXR's ZIP_COMPRESSION: blocks of 16 scan lines, deflated in the zlib format. At igzip's
 // level 2 the industrial scene's features.exr (1000 x 1000, 17 channels) is written in 0.21 s
-// against OpenEXR's 0.92 s (its zlib at its default level 4), 3.6 % larger; levels 1 and 3 were
+// against OpenEXR's 0.92 s (its zlib at its default level 4), 3.6 % larger; levels 1 and 3 are
 // slower here and no smaller (docs/benchmarks.md).
 constexpr int kExrZipLines = 16;
 constexpr int kExrZipLevel = 2;

@@ -46,7 +46,7 @@ struct Image {
 
 // An 8-bit picture as a PNG stores it: `channels` code values per pixel (1: gray, 3: RGB),
 // row-major, row 0 on top. Previews are drawn straight into one (features/Plot.h): the float
-// Image of the same picture takes four times the memory, and clearing and converting it was
+// Image of the same picture takes four times the memory, and clearing and converting it would be
 // most of a preview's cost.
 struct Image8 {
     int width = 0, height = 0, channels = 1;

@@ -25,7 +25,7 @@
 // The default level, 2 of igzip's 1..3, is measured with bench/bench_npz (median of 7 writes
 // each, file written and synced; the sizes are deterministic, the times vary with the machine's
 // load), with zlib's level 1 deflating the same arrays in the same run for comparison (the
-// deflate alone; it was the default before igzip, through libzip):
+// deflate alone; zlib is what libzip deflates with on its own):
 //   T of scenes/paper/bubbles-r1.yaml (10000 x 250000, 63307 nonzeros, 0.55 MB of arrays):
 //     level 0 (stored)   547617 bytes  0.003 s
 //     level 1            181364 bytes  0.005 s

@@ -136,9 +136,9 @@ struct ArchiveSink {
 // ISA-L's igzip (Debian's libisal, BSD-3-Clause) deflating one entry at a time: the entries' raw
 // deflate streams (ZIP method 8) and their CRC-32s, made here rather than by libzip's zlib.
 //
-// Why: zlib's level 1 was the write stage's largest cost at scale (a 1000 x 1000 camera against a
-// 2000 x 2000 display: 1.1 s of one core for ltm.npz's 126 MB, 0.9 s for features.npz's 68 MB),
-// and igzip's level 2 deflates the same arrays about four times as fast, within 10 % of zlib's
+// Why: zlib's level 1, libzip's own deflate, would be the write stage's largest cost at scale (a
+// 1000 x 1000 camera against a 2000 x 2000 display: 1.1 s of one core for ltm.npz's 126 MB, 0.9 s
+// for features.npz's 68 MB), and igzip's level 2 deflates the same arrays about four times as fast, within 10 % of zlib's
 // size (io/LtmFile.h, docs/benchmarks.md). libzip stays the archive writer: an entry source whose
 // stat says its bytes are deflated already is copied as it is (libzip 1.7's add_data: no
 // recompression when the source's method is the entry's), with the CRC-32 and size the stat gives

@@ -4,7 +4,7 @@
 // Why: every fresh 4 KiB page a process touches first costs a page fault and the kernel's
 // clearing of it. On the virtual machines ltmsim is measured on that is 9-12 us a page, so the
 // arrays a render fills for the first time (T's entries, the 14 feature channels, a preview's
-// picture) spent more time faulting than being written (docs/benchmarks.md). A 2 MiB transparent
+// picture) would spend more time faulting than being written (docs/benchmarks.md). A 2 MiB transparent
 // huge page is faulted once for 512 small ones: 0.25 us per 4 KiB measured here. Linux gives huge
 // pages to anonymous memory only where asked (`madvise(MADV_HUGEPAGE)`) when the system's mode is
 // `madvise`, Debian's default, and to every large mapping in mode `always`; in mode `never` the

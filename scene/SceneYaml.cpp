@@ -216,7 +216,7 @@ std::string scene_to_yaml(const Scene& s) {
 
     // Only the split estimator has keys to write: the loader rejects split_depth with sample, and
     // a sample scene's split_depth means nothing, so a sample scene is written without the section
-    // (as every scene was before the section existed).
+    // (the sample estimator is the default).
     if (s.tracing.estimator == Estimator::Split) {
         out.open(0, "tracing");
         out.put(2, "estimator", to_string(s.tracing.estimator));

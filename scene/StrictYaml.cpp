@@ -420,8 +420,35 @@ struct DocumentStarts : YAML::EventHandler {
     }
 };
 
-InputError malformed(const YAML::Exception& e, const std::string& file) {
+// The 1-based column of the first tab in the indentation of `text`'s line `line` (1-based), or 0.
+// The indentation is the run of spaces and block indicators ("- ", "? ", ": ") before the line's
+// content: YAML counts it in spaces only, and yaml-cpp stops at a tab there with "illegal map
+// value", "illegal block entry" or "illegal tab when looking for indentation", always on the
+// tab's own line. A tab elsewhere (between a key and its value, inside a [flow] list) is
+// separation, which YAML allows.
+int indentation_tab(const std::string& text, int line) {
+    std::size_t begin = 0;
+    for (int l = 1; l < line; ++l) {
+        begin = text.find('\n', begin);
+        if (begin == std::string::npos) return 0;
+        ++begin;
+    }
+    const std::size_t end = std::min(text.find('\n', begin), text.size());
+    auto blank = [&](std::size_t i) { return i >= end || text[i] == ' ' || text[i] == '\t'; };
+    for (std::size_t i = begin; i < end; ++i) {
+        const char c = text[i];
+        if (c == '\t') return static_cast<int>(i - begin) + 1;
+        if (c != ' ' && !((c == '-' || c == '?' || c == ':') && blank(i + 1))) break;
+    }
+    return 0;
+}
+
+InputError malformed(const YAML::Exception& e, const std::string& text, const std::string& file) {
     const Loc at = e.mark.is_null() ? Loc{1, 1} : Loc{e.mark.line + 1, e.mark.column + 1};
+    if (const int tab = indentation_tab(text, at.line))
+        return InputError(file, at.line, tab, "",
+                          "malformed YAML: a tab in the indentation (YAML does not allow tabs for indentation; use "
+                          "spaces)");
     return InputError(file, at.line, at.column, "", "malformed YAML: " + one_line(e.msg));
 }
 
@@ -430,7 +457,7 @@ InputError malformed(const YAML::Exception& e, const std::string& file) {
 YAML::Node parse_document(const std::string& text, const std::string& file, const std::string& kind) {
     // The documents are counted first. yaml-cpp 0.7 never consumes a ',' outside a flow
     // collection: YAML::LoadAll(",") returns empty document after empty document until memory
-    // runs out (found by fuzz/fuzz_scene). A document that starts where the previous one started
+    // runs out (fuzz/fuzz_scene reaches it). A document that starts where the previous one started
     // made no progress, and is reported as the stray character it is.
     DocumentStarts docs;
     try {
@@ -446,7 +473,7 @@ YAML::Node parse_document(const std::string& text, const std::string& file, cons
             }
         }
     } catch (const YAML::Exception& e) {
-        throw malformed(e, file);
+        throw malformed(e, text, file);
     }
     if (docs.starts.size() > 1) {
         const YAML::Mark& m = docs.roots.size() > 1 ? docs.roots[1] : docs.starts[1];
@@ -457,7 +484,7 @@ YAML::Node parse_document(const std::string& text, const std::string& file, cons
     try {
         return YAML::Load(text);
     } catch (const YAML::Exception& e) {
-        throw malformed(e, file);
+        throw malformed(e, text, file);
     }
 }
 

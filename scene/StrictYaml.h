@@ -19,6 +19,7 @@
 //   wrong type or out-of-range value    -> the value (the list element, when one element is bad)
 //   missing required key                -> the mapping that lacks it
 //   malformed YAML                      -> where yaml-cpp stopped
+//   a tab in the indentation            -> the tab (YAML indents with spaces only)
 // Locations are those of the document a node belongs to, so a mapping nested in a larger file
 // (a scene inside a dataset spec) is reported at its lines in that file.
 //

@@ -204,7 +204,7 @@ TEST_F(FeaturesCommand, BadInputExitsTwoAndOverwritesNothing) {
     EXPECT_FALSE(fs::exists(dir / "r" / "pattern.exr"));
 }
 
-// One image keeps the old output (pattern.exr, channel Image) and its values are y = T x.
+// One image gives pattern.exr (channel Image) and its values are y = T x.
 TEST_F(FeaturesPatterns, OneImageWritesPatternExrWithTheProduct) {
     std::string err;
     ASSERT_EQ(run("features " + r() + " --pattern " + path("a.exr"), &err), 0) << err;

@@ -7,6 +7,7 @@
 //
 // The scene is small (20 x 20 camera pixels, 16 samples each, 40 x 40 display pixels): every
 // render takes a few milliseconds, so the test runs the real executable many times.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,6 +28,7 @@
 #include "tests/Tolerances.h"
 #include "io/Json.h"
 #include "io/LtmFile.h"
+#include "scene/Scene.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
 #include "trace/Render.h"
@@ -502,6 +504,23 @@ TEST_F(RenderCommand, UnreadableOrMalformedScene) {
     EXPECT_FALSE(fs::exists(out));
 }
 
+// A scene indented with tabs (an editor's habit): the message says so, at the first tab's line
+// and column, rather than yaml-cpp's "illegal map value" at the end of the key (3:12 here).
+TEST_F(RenderCommand, ASceneIndentedWithATabNamesTheTab) {
+    const fs::path tabbed = write("tabbed.yaml",
+                                  "object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}\n"
+                                  "camera:\n"
+                                  "\tresolution: [20, 20]\n"
+                                  "\tsize: [26.0, 26.0]\n"
+                                  "display: {resolution: [40, 40], size: [80.0, 80.0], z: 60.0}\n");
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(tabbed, out), dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.err, tabbed.string() + ":3:1: malformed YAML: a tab in the indentation (YAML does not allow tabs for indentation; "
+                         "use spaces)\n");
+    EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(RenderCommand, SceneWithAnUnknownKey) {
     const fs::path bad = write("typo.yaml",
                                "object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}\n"
@@ -567,6 +586,50 @@ TEST_F(RenderCommand, UsageErrorsExitTwo) {
     EXPECT_EQ(ltmsim(render(scene, out, "--threads -1"), dir).status, 2);
     EXPECT_EQ(ltmsim("render '" + scene.string() + "'", dir).status, 2);  // no -o
     EXPECT_FALSE(fs::exists(out));
+}
+
+// Every integer option of every command takes whole numbers in a stated range and says so in
+// words, naming the option: a negative, fractional, too large (beyond an int) or non-numeric value
+// is a usage error (exit 2, one short message, nothing written), refused before any input is read.
+TEST_F(RenderCommand, IntegerOptionsStateTheirRangeInWords) {
+    const fs::path out = dir / "out";
+    const std::string s = "'" + scene.string() + "'", o = "'" + out.string() + "'";
+    const std::string threads = "expected a whole number >= 1, or 0 for all cores";
+    struct Case {
+        std::string args, message;
+    };
+    std::vector<Case> cases;
+    for (const char* bad : {"-1", "1.5", "99999999999", "abc", "+-2"})
+        cases.push_back({"render " + s + " -o " + o + " --threads " + bad,
+                         fmt::format("--threads: {}; got '{}'", threads, bad)});
+    // The other commands that compute (their positional arguments need not exist: the option is
+    // refused first).
+    for (const std::string& command :
+         {"mesh " + s + " -o " + (dir / "m.ply").string(), "trace-rays " + s + " --rays r.jsonl", "validate " + s,
+          "features " + o, "experiment " + o + " -o " + o, "dataset " + s + " -o " + o,
+          "acquire " + o + " --patterns 8"})
+        cases.push_back({command + " --threads -1", "--threads: " + threads + "; got '-1'"});
+    cases.push_back({"dataset " + s + " -o " + o + " --jobs -1",
+                     "--jobs: expected a whole number >= 1, or 0 for threads + 1; got '-1'"});
+    cases.push_back({"validate " + s + " --density 0", "--density: expected a whole number >= 1; got '0'"});
+    cases.push_back({"render " + s + " -o " + o + " --estimator split --split-depth " + std::to_string(ltm::kMaxSplitDepth + 1),
+                     fmt::format("--split-depth: expected a whole number from 0 to {}; got '{}'", ltm::kMaxSplitDepth,
+                                 ltm::kMaxSplitDepth + 1)});
+    cases.push_back({"render " + s + " -o " + o + " --estimator split --split-depth 1.5",
+                     fmt::format("--split-depth: expected a whole number from 0 to {}; got '1.5'", ltm::kMaxSplitDepth)});
+    // A negative block side would otherwise fall back to the default block silently.
+    cases.push_back({"render " + s + " -o " + o + " --dark-block -5", "--dark-block: expected a whole number >= 0; got '-5'"});
+    cases.push_back({"features " + o + " --dark-block -1", "--dark-block: expected a whole number >= 0; got '-1'"});
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.args);
+        const Outcome r = ltmsim(c.args, dir);
+        EXPECT_EQ(r.status, 2);
+        EXPECT_EQ(r.err.substr(0, r.err.find('\n')), c.message);
+        EXPECT_LT(r.err.size(), 200u) << r.err;
+        EXPECT_FALSE(fs::exists(out));
+    }
+    // The bounds themselves are taken.
+    EXPECT_EQ(ltmsim(render(scene, out, "--threads +1 --estimator split --split-depth 0 --dark-block 0"), dir).status, 0);
 }
 
 TEST_F(RenderCommand, TheEstimatorComesFromTheSceneOrTheCommandLineAndRunJsonRecordsIt) {

@@ -52,7 +52,7 @@ TEST(FuzzRegressions, FoundInputsAndSeedsAreHandled) {
         }
 }
 
-// The bad files issue 10 lists, each through its target (an exception other than the documented
+// Pathological texts, each through its target (an exception other than the documented
 // one, or a crash, fails): a scene nested 10^5 levels deep, numbers beyond a double or -0.
 TEST(FuzzRegressions, PathologicalTexts) {
     auto run = [](const Target& t, const std::string& s) { t(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()); };

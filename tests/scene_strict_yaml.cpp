@@ -116,6 +116,27 @@ TEST(StrictYaml, DocumentsAreNamedByTheirKind) {
     EXPECT_TRUE(yaml::parse_document("", "empty.yaml", "dataset spec").IsNull());
 }
 
+// YAML indents with spaces only (YAML 1.2, section 6.1: "tab characters must not be used in
+// indentation"); yaml-cpp stops at such a tab with "illegal map value" and the like, which does not
+// say why. The message names the tab at its own line and column. A tab that separates (after a
+// key's colon, between the items of a [flow] list) is allowed YAML and reads as a space.
+TEST(StrictYaml, ATabInTheIndentationIsNamedAtTheTab) {
+    const std::string tab_message =
+        "malformed YAML: a tab in the indentation (YAML does not allow tabs for indentation; use spaces)";
+    // yaml-cpp: "illegal map value" at 3:8 (after the key), the tab is 3:1.
+    EXPECT_EQ(error_of("count: 3\nscene:\n\tseed: 1\n"), "spec.yaml:3:1: " + tab_message);
+    // "illegal tab when looking for indentation" at the tab itself, after two spaces.
+    EXPECT_EQ(error_of("count: 3\nscene:\n  seed: 1\n  \tobject: {}\n"), "spec.yaml:4:3: " + tab_message);
+    // After a block sequence's "- ": yaml-cpp reports "illegal map value" at 3:7.
+    EXPECT_EQ(error_of("count: 3\nscene:\n  -\ta: 1\n     b: 2\n"), "spec.yaml:3:4: " + tab_message);
+    // Separation tabs parse, and other malformed YAML keeps yaml-cpp's own reason.
+    EXPECT_EQ(error_of("count:\t3\njitter: [1,\n\t2]\nscene: {}\n"),
+              "spec.yaml:2:9: jitter: expected a number, got a list of 2 items");
+    EXPECT_EQ(error_of("count: 3\n\tjitter: [1\n"), "spec.yaml:2:1: " + tab_message);
+    EXPECT_EQ(error_of("count: 3 \t# a comment\njitter: [1\n"),
+              "spec.yaml:3:1: malformed YAML: end of sequence flow not found");
+}
+
 TEST(StrictYaml, UnreadableFile) {
     const std::string missing = ltm::test::source_dir() + "/scenes/no-such-spec.yaml";
     try {
@@ -224,7 +245,7 @@ TEST(InlineScene, WithoutPrefixThePathsOfAFile) {
 }  // namespace ltm
 
 // yaml-cpp 0.7 loops forever on a ',' outside a flow collection (YAML::LoadAll(",") returns empty
-// documents until memory runs out; found by fuzz/fuzz_scene). It is a located error instead.
+// documents until memory runs out; fuzz/fuzz_scene reaches it). Here it is a located error.
 TEST(StrictYaml, AStrayCommaIsAnErrorNotAHang) {
     for (const char* text : {",", "# c\n\n  ,\n", ", ,"}) {
         SCOPED_TRACE(text);

@@ -250,8 +250,8 @@ TEST(TetWalkInclusion, DisplayErrorsHaveNoSystematicRadialPart) {
 // 2.5 mm, delta_n = 0.02 inclusion in the 8 mm window, display 60 mm behind, every display hit of
 // the 625 axial rays of bench/bench_grin.cpp (section e) within tol::kInclusionDisplayTarget of
 // the converged reference (GrinReference, integrated to 1e-12 per step: its own error is orders
-// below). Without the lattice's end correction the largest error was 1.6e-3 mm
-// (docs/grin.md); the end term it removes was most of it.
+// below). Without the lattice's end correction the largest error is 1.6e-3 mm
+// (docs/grin.md), most of it the end term the correction removes.
 TEST(TetWalkInclusion, DisplayHitsMeetTheTargetAtTheDefaultTolerance) {
     const double tolerance = MeshOptions{}.index_tolerance;
     const test::Built b = test::build(inclusion_scene(tolerance));

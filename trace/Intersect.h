@@ -26,7 +26,7 @@ struct Roots {
 
 // Roots of a t^2 + b t + c with the discriminant given separately (disc = b^2 - 4ac, or a
 // cancellation-free equivalent). Inline, with the sphere and the cylinder: every segment of every
-// path solves the object's patches (perp: the calls were 4 % of an analytic render).
+// path solves the object's patches (perf: as calls they cost 4 % of an analytic render).
 inline Roots solve_quadratic(double a, double b, double c, double disc) {
     Roots r;
     if (!(disc >= 0) || a == 0) {

@@ -335,8 +335,8 @@ constexpr Jump lcg_jump(int j) {
 }
 // Four Rng::uniform draws per lane, and the streams after them: the eight states they read each
 // from the first by its jump (wrapping arithmetic: the very states the eight steps reach), so the
-// eight multiplications do not wait on one another as the steps' chain does (perf: the camera
-// kernel's time was that chain's latency).
+// eight multiplications do not wait on one another as the steps' chain does (perf: as a chain,
+// its latency would be the camera kernel's time).
 LTM_LANE void uniform4(Streams& r, Real (&u)[4]) {
     const Bits x = r.state, inc = r.inc;
     const auto state = [&](int j) {

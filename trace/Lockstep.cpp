@@ -396,8 +396,8 @@ void Tracer::sample_lockstep(int n, const Vec3* origins, const Vec3* directions,
 // interaction kernels' own arrays from one packet query to the next (the kernels read each ray
 // where spawn_lanes left it, and each stream where fresnel_lanes left it), each hit's record made
 // where they read it: no Tracer::Hit or Tracer::State per lane, nothing copied between stages
-// but the hit (perf: writing and reading those records was most of sample_lockstep's own time
-// for mesh-only). Lane i is path i throughout; the kernels go through every lane, the ended ones
+// but the hit (perf: writing and reading such records per lane would be most of the mesh-only
+// lockstep's own time). Lane i is path i throughout; the kernels go through every lane, the ended ones
 // included (what they compute there is never read, as for the padding lanes). A lane whose step
 // the kernels do not cover leaves the lockstep for good: its state becomes a State and the path
 // runs on alone (run), which is what it computes in the lockstep too (tests/trace_packets.cpp).

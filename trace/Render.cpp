@@ -90,7 +90,7 @@ std::int32_t merge_row(std::vector<RowEntry>& entries, int spp, std::vector<std:
     // The entries accumulate in an open-addressing table, one probe sequence per entry, and only
     // the distinct columns are sorted: each column's sum is the same additions in the same order
     // (sample order) as a stable sort by column and a merge would make, without sorting every
-    // entry (a stable sort of a 1024-sample row was 5 % of a render: perf). Rows of up to kHashed
+    // entry (a stable sort of a 1024-sample row costs 5 % of a render: perf). Rows of up to kHashed
     // entries (a pixel's samples, unless its spp is large) use tables on the stack; longer ones
     // a thread's scratch, grown once.
     constexpr size_t kHashed = 256;
@@ -306,8 +306,8 @@ RenderResult render(const Tracer& tracer, const RenderOptions& opt) {
     // the split one), and no more than the budget lets it hold before it streams (plus one wave).
     // A reservation's pages are mapped only as they are written (in huge pages, 2 MiB at a time),
     // so memory is what T fills; the arrays never grow by copying (unless a render without a
-    // budget outgrows kUnbudgeted), and a whole T is moved out at the end, not copied: each copy's
-    // first touches of fresh pages were most of the serial time of a short render.
+    // budget outgrows kUnbudgeted), and a whole T is moved out at the end, not copied: a copy's
+    // first touches of fresh pages would be most of the serial time of a short render.
     std::vector<std::int32_t> held_indices;
     std::vector<float> held_data;
     std::vector<std::int64_t> indptr;

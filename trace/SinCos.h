@@ -2,7 +2,7 @@
 // The cosine and sine of the angle 2 pi u, for the camera's azimuth (u a uniform draw): one
 // function whose every operation a SIMD lane repeats (lanes::cos_sin_turns, trace/Lanes.h), so a
 // camera sample is the same bits whether it is computed alone or in a packet. The C library's
-// sin and cos have no vector twin with their bits, and were 8 % of a render (perf, one thread,
+// sin and cos have no vector twin with their bits, and cost 8 % of a render (perf, one thread,
 // paper scene at 1024 spp, mesh-only).
 //
 // The maths, for any u with |4 u| < 2^51 (the camera's u lie in [0, 1)):

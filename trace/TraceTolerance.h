@@ -64,8 +64,9 @@ inline constexpr double kRimInsideMargin = 1e-6;
 // So delta = kGuardStepBounds x the root's point error bound (kSpawnOffsetBounds x
 // point_error_bound) / cos, a factor 4 above the error, floored at kPointErrorUlps u (|t| + L);
 // where that exceeds kGuardStepMax (|t| + L) = 1e-9 L (grazing roots), delta is that: 4 orders of
-// magnitude inside both the error and the smallest feature. (Every root used 1e-9 L until
-// tests/trace_stress.cpp found rays within it of such corners refracting at a wall's continuation.)
+// magnitude inside both the error and the smallest feature. (With 1e-9 L for every root, rays
+// within it of such corners would refract at a wall's continuation; tests/trace_stress.cpp shoots
+// such rays.)
 // A wall's root counts only inside the lens, up to the rounding of the root and of the lens's
 // distance: kSpawnOffsetBounds x its point error bound.
 inline constexpr double kGuardStepBounds = 4.0;

@@ -276,9 +276,10 @@ Tracer::Hit Tracer::exact_guard(const Vec3& o, const Vec3& d, double tmax, int s
 
 // How far outside the lens a root of a cutter's wall may lie and still count as a crossing of the
 // glass boundary: the rounding of the root and of the lens's distance (twice the point error bound),
-// so a ray through the seam where the wall meets a face is caught by one of the two. It was the
-// classification step 1e-9 (|t| + L) until tests/trace_stress.cpp found rays within that
-// step above a face taking a pit's or a groove's wall there, in the air, for a way into the glass.
+// so a ray through the seam where the wall meets a face is caught by one of the two. A wider slack,
+// such as the classification step 1e-9 (|t| + L), would let a ray within that step above a face
+// take a pit's or a groove's wall there, in the air, for a way into the glass (tests/
+// trace_stress.cpp shoots such rays).
 double Tracer::lens_slack(int tag, const Vec3& x) const {
     return trace_tol::kSpawnOffsetBounds * point_error_bound(solid_.surfaces[tag].surface, x);
 }
@@ -286,11 +287,11 @@ double Tracer::lens_slack(int tag, const Vec3& x) const {
 // The step either side of a root of a cutter's wall at which membership of the cutter is tested:
 // beyond the root's own error along the ray (its point error bound over the cosine of incidence,
 // kGuardStepBounds times), at least a few ulps of the scene, and at most kGuardStepMax (|t| + L),
-// the step this test always used. So near another wall of the same tool (a U's side line
-// continuing past its corner with the bottom arc, a V's wall past the apex) the test still sees
-// the wall the root is on, while a grazing root, whose error along the ray grows as 1 / cos, keeps
-// the wide step. (tests/trace_stress.cpp found rays within 1e-9 L of such corners refracting at a
-// wall's continuation inside the glass when every root used the wide step.)
+// the wide step. So near another wall of the same tool (a U's side line continuing past its corner
+// with the bottom arc, a V's wall past the apex) the test still sees the wall the root is on,
+// while a grazing root, whose error along the ray grows as 1 / cos, keeps the wide step. (With the
+// wide step for every root, rays within 1e-9 L of such corners would refract at a wall's
+// continuation inside the glass; tests/trace_stress.cpp shoots such rays.)
 double Tracer::guard_step(int tag, const Vec3& x, const Vec3& d, double t) const {
     const Surface& S = solid_.surfaces[tag].surface;
     const double wide = trace_tol::kGuardStepMax * (std::fabs(t) + scale_);
@@ -591,7 +592,7 @@ Tracer::Hit Tracer::refined_hit(const State& st, PathStats& stats, const Candida
 // trace_stress.cpp, SeamExactRays, counts them). Anything else is an unresolved leak: a found hit
 // is taken as found, and with nothing ahead the path is lost (counted, its weight reported as
 // lost) instead of escaping from inside the glass as if it had left it (tests/trace_stress.cpp
-// found rays along the rim that ended in the glass).
+// shoots rays along the rim, where a path could otherwise end in the glass).
 Tracer::Hit Tracer::repair_medium(const State& st, Hit h, PathStats& stats) const {
     if (h.found) {
         const SurfaceInfo& s = solid_.surfaces[h.tag];

@@ -86,7 +86,7 @@ struct Tracer::SplitStack {
 // Two small steps that both the path-at-a-time tracer (Tracer.cpp) and the lockstep one
 // (Lockstep.cpp) take for every path, defined here so that each inlines them: the record is then
 // written once where it lives (a returned PathResult copied into the results, or a Hit reset
-// before its fields are set, was a store reloaded and a stall; perf).
+// before its fields are set, would be a store reloaded and a stall; perf).
 
 // Before every segment: the depth limit (a path that reaches it is truncated), and the segment's
 // start for a recorded path.
@@ -117,7 +117,7 @@ inline void Tracer::mesh_only_record(const Vec3& o, const Vec3& d, const Candida
 
 // The spawn offset of a triangle hit at p, t along its ray: the float hit's error, a few float
 // ulps of the coordinates involved. (The largest of the four as std::max({...}) picks it, the
-// first largest by <, written out: the list's loop was a visible cost per hit; perf.)
+// first largest by <, written out: the list's loop is a visible cost per hit; perf.)
 inline double Tracer::mesh_only_offset(const Vec3& p, double t) {
     double mag = std::fabs(p.x);
     if (mag < std::fabs(p.y)) mag = std::fabs(p.y);
