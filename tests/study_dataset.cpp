@@ -6,9 +6,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <fmt/format.h>
 #include <map>
 #include <random>
+#include <unistd.h>
 
 #include "defects/DefectSolid.h"
 #include "io/InputError.h"
@@ -16,6 +18,7 @@
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "study/Coco.h"
+#include "study/DatasetCard.h"
 #include "study/DatasetSpec.h"
 #include "study/GoodnessOfFit.h"
 #include "study/Sampler.h"
@@ -236,10 +239,18 @@ object: {ior: {normal: [1.5168, 0.001]}}
             }
             for (const auto& [key, value] : got.items()) have.push_back(key);
             EXPECT_EQ(have, listed);
-            if (got.contains("radius")) EXPECT_EQ(got["radius"].get<double>(), d.semi_axes.x);
-            if (got.contains("semi_axes")) EXPECT_EQ(got["semi_axes"][2].get<double>(), d.semi_axes.z);
-            if (got.contains("width")) EXPECT_EQ(got["width"].get<double>(), d.width);
-            if (got.contains("delta_n")) EXPECT_EQ(got["delta_n"].get<double>(), d.delta_n);
+            if (got.contains("radius")) {
+                EXPECT_EQ(got["radius"].get<double>(), d.semi_axes.x);
+            }
+            if (got.contains("semi_axes")) {
+                EXPECT_EQ(got["semi_axes"][2].get<double>(), d.semi_axes.z);
+            }
+            if (got.contains("width")) {
+                EXPECT_EQ(got["width"].get<double>(), d.width);
+            }
+            if (got.contains("delta_n")) {
+                EXPECT_EQ(got["delta_n"].get<double>(), d.delta_n);
+            }
         }
         // Every placement rule holds (the loader checked them), and enclosed defects keep apart.
         const Lens lens(a.scene.object.lens);
@@ -432,6 +443,58 @@ defects:
         }
     }
     EXPECT_TRUE(thrown);
+}
+
+// ---- the dataset card ----
+
+TEST(DatasetCard, ShowsEverySampledParametersRequestedAndRealisedLawWithItsTest) {
+    const DatasetSpec spec = parse_dataset_spec(spec_text(R"(samples: 3
+defect_free_fraction: 0.25
+defects:
+  - {type: bubble, count: {uniform_int: [1, 2]}, radius: {uniform: [0.1, 0.5]}}
+  - {type: scratch, count: 1, width: 0.05, shape: straight, profile: {choice: [V, U]}}
+)"),
+                                                "spec.yaml");
+    // Three samples (labels.json as the dataset writes them, cut to what the card reads): radii
+    // 0.2, 0.3, 0.45; scratch profiles V, V, U and one more V; widths all 0.05; one defect-free.
+    const auto defect = [](int entry, const char* kind, io::Json sampled) {
+        return io::Json{{"kind", kind}, {"spec_entry", entry}, {"pixel_area", 1},
+                        {"parameters", {{"size", 0.1}}}, {"sampled", std::move(sampled)}};
+    };
+    const auto scratch = [&](const char* profile) {
+        return defect(1, "scratch", {{"surface", "front"}, {"width", 0.05}, {"depth", 0.02}, {"profile", profile},
+                                     {"shape", "straight"}, {"length", 2.0}});
+    };
+    std::vector<io::Json> labels = {
+        {{"split", "train"}, {"defect_free", false},
+         {"defects", {defect(0, "bubble", {{"radius", 0.2}}), defect(0, "bubble", {{"radius", 0.3}}), scratch("V")}}},
+        {{"split", "train"}, {"defect_free", false}, {"defects", {defect(0, "bubble", {{"radius", 0.45}}), scratch("V")}}},
+        {{"split", "train"}, {"defect_free", false}, {"defects", {scratch("U"), scratch("V")}}},
+        {{"split", "train"}, {"defect_free", true}, {"defects", io::Json::array()}},
+    };
+    const io::Json identity = {{"seed", 1}, {"requested", requested_parameters(spec)}};
+    const auto dir = std::filesystem::temp_directory_path() / fmt::format("ltm-card-{}", ::getpid());
+    write_dataset_card(dir.string(), identity, "samples: 3\n", labels, 4, {}, {});
+    std::ifstream in(dir / "README.md");
+    const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::filesystem::remove_all(dir);
+    // Radii against U(0.1, 0.5): F = 0.25, 0.5, 0.875, so D = max(0.25 - 0, 1/3 - 0.25, 0.5 - 1/3,
+    // 2/3 - 0.5, 0.875 - 2/3, 1 - 0.875) = 0.25; n D = 0.75, where P(D_3 < D) = 3!/3^3 (2 n D - 1)^3
+    // = 1/36 (Ruben-Gambino): p = 0.97.
+    EXPECT_NE(md.find("| defects[0] bubble radius | {uniform: [0.1, 0.5]} | 3 | 0.2 | 0.3 | 0.45 | 0.3167 | D = 0.2500 | 0.97 |"),
+              std::string::npos)
+        << md;
+    // A constant: every value equal to it.
+    EXPECT_NE(md.find("| defects[1] scratch width | 0.05 | 4 | 0.05 | 0.05 | 0.05 | 0.05 | constant | all equal |"),
+              std::string::npos)
+        << md;
+    // Profiles V 3, U 1 against 2 each: chi2 = (1 + 1) / 2 = 1 on 1 dof, p = erfc(sqrt(1/2)) = 0.32.
+    EXPECT_NE(md.find("| defects[1] scratch profile | {choice: [V, U]} | 4 | V 3, U 1 | chi2 = 1 (1 dof) | 0.32 |"),
+              std::string::npos)
+        << md;
+    // Counts per sample that is not defect-free: bubbles 2, 1, 0.
+    EXPECT_NE(md.find("| defects[0] bubble count | {uniform_int: [1, 2]} | 3 | 0 | 1 | 2 | 1 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("- defect-free samples: 1 (requested share 0.25: 1.0 expected)"), std::string::npos) << md;
 }
 
 // ---- COCO RLE ----
