@@ -25,6 +25,15 @@ struct Source {
     }
 };
 
+// A window (flat faces) of the given thickness and diameter, mm.
+Lens window(double thickness, double diameter) {
+    LensSpec s;
+    s.r1 = s.r2 = INFINITY;
+    s.center_thickness = thickness;
+    s.diameter = diameter;
+    return Lens(s);
+}
+
 // The z-score of a sample mean against its expectation mu, for draws of variance var.
 double z_of(double mean, double mu, double var, long n) { return (mean - mu) / std::sqrt(var / static_cast<double>(n)); }
 
@@ -35,11 +44,7 @@ TEST(Bubbles, RadiiAreUniformWhateverRoomTheyFind) {
     // with its rejected positions would have density proportional to 1 - 2r on [0.1, 0.45] (mean
     // 0.230 instead of 0.275: 7.8 sigma at n = 300). Drawn once, radii are uniform: mean
     // (min + max) / 2, variance (max - min)^2 / 12.
-    LensSpec s;
-    s.r1 = s.r2 = INFINITY;
-    s.center_thickness = 1;
-    s.diameter = 40;
-    const Lens lens(s);
+    const Lens lens = window(1, 40);
     BubblePopulation p;
     p.count = 300;
     p.min_radius = 0.1;
@@ -55,11 +60,7 @@ TEST(Bubbles, RadiiAreUniformWhateverRoomTheyFind) {
 TEST(GlassPoints, UniformOverAWindowsVolume) {
     // A window of radius a and thickness t: rho^2 / a^2 and (z + t/2) / t are independent and
     // uniform on [0, 1] (mean 1/2, variance 1/12).
-    LensSpec s;
-    s.r1 = s.r2 = INFINITY;
-    s.center_thickness = 3;
-    s.diameter = 20;
-    const Lens lens(s);
+    const Lens lens = window(3, 20);
     Source src(1);
     const long n = 20000;
     double m1 = 0, m2 = 0;

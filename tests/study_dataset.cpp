@@ -51,6 +51,17 @@ std::string error_of(const std::string& text) {
 
 double z_of(double mean, double mu, double var, long n) { return (mean - mu) / std::sqrt(var / static_cast<double>(n)); }
 
+// The InputError that drawing sample i throws (the test fails if there is none).
+InputError draw_error(const DatasetSpec& s, long i) {
+    try {
+        draw_sample(s, i);
+    } catch (const InputError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "no error drawing sample " << i;
+    return InputError("", 0, 0, "", "no error");
+}
+
 }  // namespace
 
 // ---- distributions ----
@@ -298,18 +309,14 @@ defects:
 max_attempts: 100
 )",
                                              "spec.yaml");
-    try {
-        draw_sample(s, 0);
-        FAIL() << "no error";
-    } catch (const InputError& e) {
-        EXPECT_EQ(e.line, 5);
-        EXPECT_EQ(e.column, 28);
-        EXPECT_EQ(e.key_path, "defects[0].radius");
-        EXPECT_NE(std::string(e.what()).find("a bubble with radius 5 (sample 0) fits nowhere in the object: none of 100 "
-                                             "positions holds it"),
-                  std::string::npos)
-            << e.what();
-    }
+    const InputError e = draw_error(s, 0);
+    EXPECT_EQ(e.line, 5);
+    EXPECT_EQ(e.column, 28);
+    EXPECT_EQ(e.key_path, "defects[0].radius");
+    EXPECT_NE(std::string(e.what()).find("a bubble with radius 5 (sample 0) fits nowhere in the object: none of 100 "
+                                         "positions holds it"),
+              std::string::npos)
+        << e.what();
 }
 
 // The issue's scenario: a 1 mm window, 3 bubbles per sample, radius {log_uniform: [0.1, 0.4]}. A
@@ -395,21 +402,17 @@ defects:
 max_attempts: 200
 )",
                                              "spec.yaml");
-    try {
-        draw_sample(s, 0);
-        FAIL() << "no error";
-    } catch (const InputError& e) {
-        EXPECT_EQ(e.line, 5);
-        EXPECT_EQ(e.key_path, "defects[0]");
-        const std::string m = e.what();
-        EXPECT_NE(m.find("sample 0: its 3 defects do not fit together: 100 rounds of placing all of them, 200 positions "
-                         "per defect, found no room for the bubble with radius 0.45"),
-                  std::string::npos)
-            << m;
-        EXPECT_NE(m.find("The sizes, kept in every round: bubble (radius 0.45); bubble (radius 0.45); bubble (radius 0.45)"),
-                  std::string::npos)
-            << m;
-    }
+    const InputError e = draw_error(s, 0);
+    EXPECT_EQ(e.line, 5);
+    EXPECT_EQ(e.key_path, "defects[0]");
+    const std::string m = e.what();
+    EXPECT_NE(m.find("sample 0: its 3 defects do not fit together: 100 rounds of placing all of them, 200 positions "
+                     "per defect, found no room for the bubble with radius 0.45"),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("The sizes, kept in every round: bubble (radius 0.45); bubble (radius 0.45); bubble (radius 0.45)"),
+              std::string::npos)
+        << m;
 }
 
 TEST(Sampler, ASizeRangeReachingBeyondTheObjectIsAnErrorAtItsKey) {
