@@ -264,7 +264,7 @@ TEST_F(Dataset, BadInputIsLocatedExitsWithTwoAndWritesNothing) {
         {spec().replace(spec().find("[0.2, 1.0]"), 10, "[1.0, 0.2]"), "is empty"},
         {spec().replace(spec().find("{poisson: 1.5}"), 14, "{uniform_int: [0, 65]}"), "a count from 0 to 64"},
         {"scene: base.yaml\nsamples: 3\ndefects: [{type: bubble, radius: 5.0}]\nmax_attempts: 20\n",
-         "spec.yaml:3:35: defects[0].radius: a bubble with radius 5 (sample 0) fits nowhere in the object: none of 20 "
+         "spec.yaml:3:34: defects[0].radius: a bubble with radius 5 (sample 0) fits nowhere in the object: none of 20 "
          "positions holds it"},
         {"scene: bad-scene.yaml\nsamples: 3\ndefects: [{type: bubble, radius: 0.1}]\n",
          "bad-scene.yaml:1:9: object.ior: missing required key 'ior'"},
