@@ -79,8 +79,8 @@ const std::string& draw_word(const std::string& key, const Choice& c, Rng& rng, 
 // Step 4: the parameters of a defect of entry k. For a scratch: surface, width, depth, profile,
 // shape, length and, for an arc, arc_radius; for a bubble, particle or inhomogeneity: radius or
 // the three semi_axes, then an inhomogeneity's delta_n and profile, a pit's surface and
-// center_depth. The defect's kind-independent checks on the sizes alone: an arc that would close
-// its circle (length >= 2 pi arc_radius) exists nowhere.
+// center_depth. The one check on the sizes alone: a scratch arc whose length reaches 2 pi
+// arc_radius would close its circle, and exists nowhere.
 DrawnDefect draw_parameters(const DatasetSpec& spec, int entry, Rng& rng, long index) {
     const DefectKindSpec& k = spec.defects[static_cast<size_t>(entry)];
     DrawnDefect out;

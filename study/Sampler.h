@@ -28,7 +28,7 @@
 //
 // A defect that finds no room: if it finds none in an empty object either (max_attempts more
 // positions), its size fits nowhere: InputError at the key that decides its size
-// ("defects[0].radius: a bubble of radius 0.52 (sample 17) fits nowhere in the object ...").
+// ("defects[0].radius: a bubble with radius 0.52 (sample 17) fits nowhere in the object ...").
 // Otherwise the earlier defects crowd it out, and every position of the sample is drawn again,
 // sizes kept, up to kPlacementRounds rounds; then InputError at its entry naming the sample and
 // every size ("defects[1]: sample 17: its 12 defects do not fit together ..."). A truncated normal
