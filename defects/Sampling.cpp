@@ -20,9 +20,11 @@ std::vector<Defect> sample_bubbles(const Lens& lens, const BubblePopulation& p) 
     std::vector<Defect> out;
     out.reserve(static_cast<size_t>(p.count));
     for (int i = 0; i < p.count; ++i) {
+        // The radius is drawn once: redrawing it with a rejected position would favour the sizes
+        // that fit more easily.
+        const double r = p.min_radius + (p.max_radius - p.min_radius) * uniform01(g);
         bool placed = false;
         for (int attempt = 0; attempt < 1000 && !placed; ++attempt) {
-            const double r = p.min_radius + (p.max_radius - p.min_radius) * uniform01(g);
             const double x = a * (2 * uniform01(g) - 1), y = a * (2 * uniform01(g) - 1);
             const double z = zlo + (zhi - zlo) * uniform01(g);
             const Vec3 c{x, y, z};
@@ -39,7 +41,8 @@ std::vector<Defect> sample_bubbles(const Lens& lens, const BubblePopulation& p) 
             placed = true;
         }
         if (!placed)
-            throw std::runtime_error(fmt::format("could not place bubble {} of {} after 1000 attempts", i + 1, p.count));
+            throw std::runtime_error(
+                fmt::format("could not place bubble {} of {} (radius {}) after 1000 positions", i + 1, p.count, r));
     }
     return out;
 }

@@ -19,9 +19,10 @@ struct BubblePopulation {
     std::uint64_t seed = 1;
 };
 
-// Spherical bubbles with centres uniform in the glass volume (rejection sampling in the bounding
-// cylinder), each strictly inside the glass and clear of the others by min_clearance. Throws
-// std::runtime_error if `count` cannot be placed within 1000 attempts per bubble.
+// Spherical bubbles, each with its radius drawn once (uniform in [min, max]) and its centre then
+// uniform over where it fits (rejection sampling in the bounding cylinder): strictly inside the
+// glass and clear of the others by min_clearance. The radii are uniform whatever the room; throws
+// std::runtime_error if a bubble finds no place in 1000 positions.
 std::vector<Defect> sample_bubbles(const Lens& lens, const BubblePopulation& p);
 
 // ---- Geometric draws for sampled datasets (study/Sampler.h) ----

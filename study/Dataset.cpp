@@ -190,6 +190,7 @@ json identity(const DatasetSpec& spec, const std::string& version) {
     j["spec_sha256"] = io::sha256_hex(spec.canonical);
     j["samples"] = spec.samples;
     j["seed"] = spec.seed;
+    j["requested"] = requested_parameters(spec);
     return j;
 }
 

@@ -18,8 +18,8 @@ using yaml::Item;
 using yaml::KeyRule;
 using yaml::Loc;
 
-// What a real parameter may take: any value, a positive one (a length), or one in (0, 1].
-enum class Range { Any, Positive, NonNegative };
+// What a real parameter may take: any value, a positive one (a length), or a non-negative one.
+using Range = Distribution::Range;
 
 class SpecParser {
 public:
@@ -50,7 +50,9 @@ Distribution SpecParser::distribution(const YAML::Node& v, Loc at, const std::st
     if (v.IsScalar()) {
         const double x = r_.number(v, at, path);
         check_value(x, at, path);
-        return Distribution::constant(x);
+        Distribution d = Distribution::constant(x);
+        d.range = range;
+        return d;
     }
     if (!v.IsMap() || v.size() != 1)
         r_.fail(at, path,
@@ -71,6 +73,7 @@ Distribution SpecParser::distribution(const YAML::Node& v, Loc at, const std::st
     Distribution d;
     d.a = xs[0];
     d.b = xs[1];
+    d.range = range;
     if (e.key == "normal") {
         d.kind = Distribution::Kind::Normal;
         if (!(d.b > 0)) r_.fail(e.value_loc(), p + "[1]", fmt::format("the standard deviation must be positive, got {}", d.b));
@@ -173,25 +176,27 @@ DefectKindSpec SpecParser::defect_kind(const YAML::Node& node, const std::string
     rule.keys = t == 0 ? kBubbleKeys : t == 1 ? kScratchKeys : t == 2 ? kParticleKeys : kInhomogeneityKeys;
     rule.context = fmt::format(" for a {} kind", to_string(k.type));
     // Documented defaults (docs/dataset.md, "Defect kinds").
-    if (k.type == DefectType::Inhomogeneity) k.radius = Distribution{Distribution::Kind::Uniform, 0.5, 2.0};
-    else k.radius = Distribution{Distribution::Kind::LogUniform, 0.05, 0.5};
+    using Kind = Distribution::Kind;
+    if (k.type == DefectType::Inhomogeneity) k.radius = Distribution{Kind::Uniform, 0.5, 2.0, Range::Positive};
+    else k.radius = Distribution{Kind::LogUniform, 0.05, 0.5, Range::Positive};
     k.count = CountDistribution{};
     k.count.a = k.count.b = 1;
     k.surface = Choice{{"front", "back"}};
     if (k.type == DefectType::Scratch) {
-        k.width = {Distribution::Kind::LogUniform, 0.01, 0.1};
-        k.depth = {Distribution::Kind::LogUniform, 0.005, 0.05};
-        k.length = {Distribution::Kind::Uniform, 1.0, 10.0};
-        k.arc_radius = {Distribution::Kind::Uniform, 2.0, 10.0};
+        k.width = {Kind::LogUniform, 0.01, 0.1, Range::Positive};
+        k.depth = {Kind::LogUniform, 0.005, 0.05, Range::Positive};
+        k.length = {Kind::Uniform, 1.0, 10.0, Range::Positive};
+        k.arc_radius = {Kind::Uniform, 2.0, 10.0, Range::Positive};
         k.scratch_profile = Choice{{"V", "U"}};
     }
-    if (k.type == DefectType::Inhomogeneity) k.delta_n = {Distribution::Kind::Uniform, 0.0005, 0.002};
+    if (k.type == DefectType::Inhomogeneity) k.delta_n = {Kind::Uniform, 0.0005, 0.002};
     yaml::Where seen;
     Loc surface_loc;
     r_.walk(node, path, rule, [&](const Item& e) {
         const std::string p = yaml::join_path(path, e.key);
         const Loc at = e.value_loc();
         seen[e.key] = at;
+        k.keys[e.key] = where(at, p);
         if (e.key == "type") return;
         if (e.key == "count") k.count = count(e.value, at, p);
         else if (e.key == "radius") {
@@ -358,6 +363,9 @@ DatasetSpec SpecParser::run(const YAML::Node& root) {
     // The canonical text: everything that decides the samples' bytes, defaults written out; the
     // sample count is left out so that a dataset can grow (`samples` raised, then --resume).
     std::string c = "# ltmsim dataset spec, canonical\n";
+    // How samples are drawn from the spec (study/Sampler.h) is part of what decides their bytes: a
+    // folder made by another sampling scheme is refused rather than continued with other draws.
+    c += fmt::format("sampling: {}\n", kSamplingScheme);
     c += fmt::format("seed: {}\ndefect_free_fraction: {}\nmin_fraction: {}\nmax_attempts: {}\nltm: {}\npreviews: {}\n",
                      spec.seed, spec.defect_free_fraction, spec.mask_fraction, spec.max_attempts, spec.keep_ltm,
                      spec.previews);
@@ -389,6 +397,12 @@ DatasetSpec SpecParser::run(const YAML::Node& root) {
 }
 
 }  // namespace
+
+SpecLocation DefectKindSpec::location_of(const std::string& key) const {
+    const auto it = keys.find(key);
+    if (it != keys.end()) return it->second;
+    return {where.line, where.column, where.key_path + "." + key};
+}
 
 DatasetSpec parse_dataset_spec(const std::string& text, const std::string& file_name) {
     const YAML::Node root = yaml::parse_document(text, file_name, "dataset spec");

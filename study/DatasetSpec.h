@@ -5,6 +5,7 @@
 // (scene/StrictYaml.h); a base scene given by path reports its own located errors.
 #include <array>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +22,9 @@ inline constexpr int kMaxDefectsPerSample = 64;
 inline constexpr double kMaxPoissonMean = 16.0;
 inline constexpr long kMaxSamples = 100000000;
 inline constexpr int kDefaultMaxAttempts = 1000;
+// The version of the sampling scheme (study/Sampler.h), part of the canonical spec: 2 draws every
+// size once, before and apart from the positions.
+inline constexpr int kSamplingScheme = 2;
 
 // Where a spec value sits in the file, for errors found after parsing (an infeasible draw).
 struct SpecLocation {
@@ -51,6 +55,11 @@ struct DefectKindSpec {
     Distribution arc_radius = Distribution::constant(2.0);
     Choice scratch_profile{{"V"}};
     SpecLocation where;  // the entry
+    // Where each key the entry gives sits (its value), for errors about what it drew; a key left
+    // to its default has none, and such errors point at the entry.
+    std::map<std::string, SpecLocation> keys;
+    // The location of `key` (e.g. "radius"): its value, or the entry with the key's path.
+    SpecLocation location_of(const std::string& key) const;
 };
 
 // Object variation: each given key replaces the base scene's value by a draw.
@@ -78,7 +87,9 @@ struct DatasetSpec {
     double mask_fraction = 0.25;     // ground_truth.min_fraction (study/GroundTruth.h)
     std::vector<DatasetSplit> splits{{"train", 1.0}};
     bool keep_ltm = false, previews = false;   // outputs
-    int max_attempts = kDefaultMaxAttempts;    // draws per defect (and per object) before giving up
+    // Positions tried per defect and placement round, draws of a truncated normal, object draws,
+    // before giving up (study/Sampler.h).
+    int max_attempts = kDefaultMaxAttempts;
     // The spec as data, canonical (the resolved base scene as YAML, every default written out):
     // two specs that draw the same samples have the same text. A dataset folder records its hash.
     std::string canonical;

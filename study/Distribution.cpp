@@ -1,5 +1,6 @@
 #include "study/Distribution.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
@@ -19,6 +20,39 @@ double Distribution::draw(Rng& rng) const {
         }
     }
     return a;
+}
+
+bool Distribution::admits(double x) const {
+    if (!std::isfinite(x)) return false;
+    switch (range) {
+        case Range::Any: return true;
+        case Range::Positive: return x > 0;
+        case Range::NonNegative: return x >= 0;
+    }
+    return true;
+}
+
+double Distribution::cdf(double x) const {
+    if (std::isnan(x)) return NAN;
+    switch (kind) {
+        case Kind::Constant: return x < a ? 0.0 : 1.0;
+        case Kind::Uniform:
+            if (!(b > a)) return x < a ? 0.0 : 1.0;
+            return std::clamp((x - a) / (b - a), 0.0, 1.0);
+        case Kind::LogUniform:
+            if (!(b > a)) return x < a ? 0.0 : 1.0;
+            if (!(x > a)) return 0.0;
+            return std::clamp(std::log(x / a) / std::log(b / a), 0.0, 1.0);
+        case Kind::Normal: {
+            // Upper tails through erfc keep their relative precision where they are small (a
+            // normal mostly below the range's end, truncated to its far tail).
+            const auto upper = [&](double t) { return 0.5 * std::erfc((t - a) / (b * std::sqrt(2.0))); };
+            if (range == Range::Any) return std::clamp(1.0 - upper(x), 0.0, 1.0);
+            if (x <= 0) return 0.0;  // below a positive or non-negative range (0 itself has measure 0)
+            return std::clamp(1.0 - upper(x) / upper(0.0), 0.0, 1.0);
+        }
+    }
+    return NAN;
 }
 
 double Distribution::lo() const { return kind == Kind::Normal ? -std::numeric_limits<double>::infinity() : a; }

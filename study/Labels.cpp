@@ -83,6 +83,7 @@ std::string sample_labels_json(const DatasetSpec& spec, const SampleDraw& s, con
                    {"center_thickness", L.center_thickness},
                    {"diameter", L.diameter},
                    {"ior", L.ior}};
+    if (!s.object_sampled.empty()) j["object_sampled"] = s.object_sampled;
     j["representation"] = to_string(run.representation);
     json defects = json::array();
     for (size_t k = 0; k < scene.defects.size(); ++k) {
@@ -92,6 +93,7 @@ std::string sample_labels_json(const DatasetSpec& spec, const SampleDraw& s, con
         d["kind"] = to_string(l.kind);
         d["spec_entry"] = s.kinds[k];
         d["parameters"] = defect_parameters(lens, scene.defects[k]);
+        d["sampled"] = s.sampled[k];
         d["bbox"] = json::array({l.bbox[0], l.bbox[1], l.bbox[2], l.bbox[3]});
         d["pixel_area"] = l.pixel_area;
         d["visibility"] = l.visibility;

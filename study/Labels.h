@@ -21,9 +21,10 @@ int coco_category(DefectType kind);
 // "size" (the largest semi-axis of an ellipsoid, a scratch's width) and, for scratches, "length".
 io::Json defect_parameters(const Lens& lens, const Defect& d);
 
-// labels.json of a sample: its index, seed, split, the image size, the ground-truth rule, and per
-// defect its id (the mask value), kind, spec entry, parameters, camera-pixel bounding box
-// [x, y, width, height], pixel area, visibility, and its mask as COCO RLE.
+// labels.json of a sample: its index, seed, split, the image size, the ground-truth rule, the
+// object (and the values its varied keys drew, `object_sampled`), and per defect its id (the mask
+// value), kind, spec entry, parameters, the values its spec keys drew (`sampled`), camera-pixel
+// bounding box [x, y, width, height], pixel area, visibility, and its mask as COCO RLE.
 std::string sample_labels_json(const DatasetSpec& spec, const SampleDraw& sample, const SceneRun& run,
                                const GroundTruth& truth);
 

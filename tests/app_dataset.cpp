@@ -264,7 +264,8 @@ TEST_F(Dataset, BadInputIsLocatedExitsWithTwoAndWritesNothing) {
         {spec().replace(spec().find("[0.2, 1.0]"), 10, "[1.0, 0.2]"), "is empty"},
         {spec().replace(spec().find("{poisson: 1.5}"), 14, "{uniform_int: [0, 65]}"), "a count from 0 to 64"},
         {"scene: base.yaml\nsamples: 3\ndefects: [{type: bubble, radius: 5.0}]\nmax_attempts: 20\n",
-         "spec.yaml:3:11: defects[0]: cannot place a bubble in the object after 20 draws (sample 0"},
+         "spec.yaml:3:34: defects[0].radius: a bubble with radius 5 (sample 0) fits nowhere in the object: none of 20 "
+         "positions holds it"},
         {"scene: bad-scene.yaml\nsamples: 3\ndefects: [{type: bubble, radius: 0.1}]\n",
          "bad-scene.yaml:1:9: object.ior: missing required key 'ior'"},
         {"scene:\n  object: {type: window, thickness: 0, diameter: 25.0, ior: 1.5}\nsamples: 3\ndefects: [{type: bubble}]\n",
@@ -352,6 +353,12 @@ print("ok", n, len(ids))
 
 TEST_F(Dataset, TheIndexIsRebuiltFromTheSampleFolders) {
     const auto full = whole("full");
+    // The card compares every sampled parameter with its requested law (study/DatasetCard.h).
+    const std::string card = full.at("README.md");
+    EXPECT_NE(card.find("## Sampled parameters: requested and realised"), std::string::npos) << card;
+    EXPECT_NE(card.find("| defects[0] bubble radius | {log_uniform: [0.2, 1]} | "), std::string::npos) << card;
+    EXPECT_NE(card.find("| defects[1] scratch width | {uniform: [0.1, 0.3]} | "), std::string::npos) << card;
+    EXPECT_NE(card.find("| defects[1] scratch shape | {choice: [straight, arc]} | "), std::string::npos) << card;
     for (const char* f : {"index.jsonl", "annotations.json", "README.md"}) fs::remove(dir / "full" / f);
     fs::remove_all(dir / "full" / "card");
     const auto r = run("dataset " + q(dir / "full") + " --index");

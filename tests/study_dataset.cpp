@@ -6,9 +6,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <fmt/format.h>
 #include <map>
 #include <random>
+#include <unistd.h>
 
 #include "defects/DefectSolid.h"
 #include "io/InputError.h"
@@ -16,7 +18,9 @@
 #include "scene/SceneJson.h"
 #include "scene/SceneLoader.h"
 #include "study/Coco.h"
+#include "study/DatasetCard.h"
 #include "study/DatasetSpec.h"
+#include "study/GoodnessOfFit.h"
 #include "study/Sampler.h"
 #include "tests/BuildPaths.h"
 #include "tests/Tolerances.h"
@@ -25,7 +29,7 @@ using namespace ltm;
 
 namespace {
 
-constexpr int kChecks = 12;
+constexpr int kChecks = 14;
 const double kZ = tol::normal_two_sided_quantile(tol::kFamilyAlpha / kChecks);
 
 const char* kScene = R"(  object: {type: lens, r1: 50.0, r2: -50.0, center_thickness: 6.0, diameter: 25.0, ior: 1.5168}
@@ -46,6 +50,17 @@ std::string error_of(const std::string& text) {
 }
 
 double z_of(double mean, double mu, double var, long n) { return (mean - mu) / std::sqrt(var / static_cast<double>(n)); }
+
+// The InputError that drawing sample i throws (the test fails if there is none).
+InputError draw_error(const DatasetSpec& s, long i) {
+    try {
+        draw_sample(s, i);
+    } catch (const InputError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "no error drawing sample " << i;
+    return InputError("", 0, 0, "", "no error");
+}
 
 }  // namespace
 
@@ -222,6 +237,32 @@ object: {ior: {normal: [1.5168, 0.001]}}
         EXPECT_EQ(a.defect_free, a.scene.defects.empty());
         EXPECT_LE(a.scene.defects.size(), static_cast<size_t>(kMaxDefectsPerSample));
         EXPECT_EQ(a.kinds.size(), a.scene.defects.size());
+        // What the sample says each defect drew is what its scene holds, under the keys that
+        // sampled_keys lists for its entry (the card's list).
+        ASSERT_EQ(a.sampled.size(), a.scene.defects.size());
+        for (size_t j = 0; j < a.scene.defects.size(); ++j) {
+            const Defect& d = a.scene.defects[j];
+            const io::Json& got = a.sampled[j];
+            std::vector<std::string> listed, have;
+            for (const SampledKey& k : sampled_keys(s.defects[static_cast<size_t>(a.kinds[j])])) {
+                const std::string base = k.key.substr(0, k.key.find('['));
+                if ((listed.empty() || listed.back() != base) && !(base == "arc_radius" && !d.arc)) listed.push_back(base);
+            }
+            for (const auto& [key, value] : got.items()) have.push_back(key);
+            EXPECT_EQ(have, listed);
+            if (got.contains("radius")) {
+                EXPECT_EQ(got["radius"].get<double>(), d.semi_axes.x);
+            }
+            if (got.contains("semi_axes")) {
+                EXPECT_EQ(got["semi_axes"][2].get<double>(), d.semi_axes.z);
+            }
+            if (got.contains("width")) {
+                EXPECT_EQ(got["width"].get<double>(), d.width);
+            }
+            if (got.contains("delta_n")) {
+                EXPECT_EQ(got["delta_n"].get<double>(), d.delta_n);
+            }
+        }
         // Every placement rule holds (the loader checked them), and enclosed defects keep apart.
         const Lens lens(a.scene.object.lens);
         for (size_t j = 0; j < a.scene.defects.size(); ++j) {
@@ -258,8 +299,8 @@ TEST(Sampler, TheDefectFreeShareAndTheSplitsFollowTheSpec) {
     EXPECT_LT(std::fabs(z_of(static_cast<double>(split["test"]) / n, 0.1, 0.1 * 0.9, n)), kZ);
 }
 
-TEST(Sampler, ASpecThatCannotBeMetIsAnErrorAtItsEntry) {
-    // A 5 mm bubble in a 3 mm window.
+TEST(Sampler, ASizeThatFitsNowhereIsAnErrorAtItsKey) {
+    // A 5 mm bubble in a 3 mm window: no position holds it.
     const DatasetSpec s = parse_dataset_spec(R"(scene:
   object: {type: window, thickness: 3.0, diameter: 25.0, ior: 1.5}
 samples: 3
@@ -268,16 +309,195 @@ defects:
 max_attempts: 100
 )",
                                              "spec.yaml");
-    try {
-        draw_sample(s, 0);
-        FAIL() << "no error";
-    } catch (const InputError& e) {
-        EXPECT_EQ(e.line, 5);
-        EXPECT_EQ(e.key_path, "defects[0]");
-        EXPECT_NE(std::string(e.what()).find("cannot place a bubble in the object after 100 draws (sample 0"),
-                  std::string::npos)
-            << e.what();
+    const InputError e = draw_error(s, 0);
+    EXPECT_EQ(e.line, 5);
+    EXPECT_EQ(e.column, 28);
+    EXPECT_EQ(e.key_path, "defects[0].radius");
+    EXPECT_NE(std::string(e.what()).find("a bubble with radius 5 (sample 0) fits nowhere in the object: none of 100 "
+                                         "positions holds it"),
+              std::string::npos)
+        << e.what();
+}
+
+// The issue's scenario: a 1 mm window, 3 bubbles per sample, radius {log_uniform: [0.1, 0.4]}. A
+// bubble of radius r fits where its centre is more than r from both faces, 1 - 2r of the
+// thickness, so redrawing the size with the position skews sizes toward small ones (median 0.176
+// instead of the requested sqrt(0.1 * 0.4) = 0.2; p = 3e-8 over 600 radii). Sizes drawn apart from
+// the positions are the requested law's draws, bit for bit.
+const char* kThinWindowSpec = R"(scene:
+  object: {type: window, thickness: 1.0, diameter: 25.0, ior: 1.5}
+samples: 1000
+seed: 3
+defects:
+  - {type: bubble, count: 3, radius: {log_uniform: [0.1, 0.4]}}
+)";
+
+TEST(Sampler, SizesFollowTheSpecWhereverTheyFit) {
+    const DatasetSpec s = parse_dataset_spec(kThinWindowSpec, "spec.yaml");
+    std::vector<double> radii;
+    for (long i = 0; i < s.samples; ++i)
+        for (const Defect& d : draw_sample(s, i).scene.defects) radii.push_back(d.semi_axes.x);
+    ASSERT_EQ(radii.size(), 3000u);
+    const Distribution& law = *s.defects[0].radius;
+    const double D = ks_statistic(radii, [&](double x) { return law.cdf(x); });
+    // Independent draws of the requested law give p uniform on [0, 1]: p below alpha / checks is a
+    // false alarm of this seeded test with that probability. Sizes redrawn with their positions
+    // give D = 0.13 here, p = 6e-44.
+    EXPECT_GT(ks_pvalue(static_cast<long>(radii.size()), D), tol::kFamilyAlpha / kChecks) << "D = " << D;
+}
+
+TEST(Sampler, SizesAreTheDrawsOfTheirLawsBitForBitAndCrowdedSamplesArePlacedAgain) {
+    // 1. The thin window. 2. Two bubbles of radius 0.40-0.45 in a window 1 mm thick and 2 mm
+    // across: each fits only within 0.1-0.2 mm of the mid-plane and 0.55-0.6 mm of the axis, and
+    // the two only apart, so a first bubble placed near the axis leaves no room for the second and
+    // the sample's positions are drawn again, its sizes kept.
+    const std::string crowded = R"(scene:
+  object: {type: window, thickness: 1.0, diameter: 2.0, ior: 1.5}
+samples: 60
+defects:
+  - {type: bubble, count: 2, radius: {uniform: [0.40, 0.45]}}
+)";
+    int again = 0;
+    for (const std::string& text : {std::string(kThinWindowSpec), crowded}) {
+        const DatasetSpec s = parse_dataset_spec(text, "spec.yaml");
+        const Distribution& law = *s.defects[0].radius;
+        for (long i = 0; i < std::min(s.samples, 200L); ++i) {
+            const SampleDraw a = draw_sample(s, i);
+            Rng unconstrained(mix_seed(s.seed, static_cast<std::uint64_t>(i)), kParameterStream);
+            ASSERT_EQ(a.scene.defects.size(), static_cast<size_t>(s.defects[0].count.a));
+            for (const Defect& d : a.scene.defects) EXPECT_EQ(d.semi_axes.x, law.draw(unconstrained)) << "sample " << i;
+            again += a.placement_rounds > 1;
+        }
     }
+    EXPECT_GT(again, 0);
+}
+
+TEST(Sampler, ANormalSizeIsTruncatedToItsRange) {
+    // radius {normal: [0.05, 0.1]}: 31 % of the normal's draws are <= 0 and drawn again; the radii
+    // follow the normal truncated to (0, inf), the law Distribution::cdf gives (KS at the file's
+    // level, as above).
+    const DatasetSpec s = parse_dataset_spec(
+        spec_text("samples: 1000\ndefects: [{type: particle, count: 3, radius: {normal: [0.05, 0.1]}}]\n"), "spec.yaml");
+    std::vector<double> radii;
+    for (long i = 0; i < s.samples; ++i)
+        for (const Defect& d : draw_sample(s, i).scene.defects) {
+            ASSERT_GT(d.semi_axes.x, 0.0);
+            radii.push_back(d.semi_axes.x);
+        }
+    const Distribution& law = *s.defects[0].radius;
+    const double D = ks_statistic(radii, [&](double x) { return law.cdf(x); });
+    EXPECT_GT(ks_pvalue(static_cast<long>(radii.size()), D), tol::kFamilyAlpha / kChecks) << "D = " << D;
+}
+
+TEST(Sampler, DefectsThatCannotFitTogetherAreAnErrorNamingTheSampleAndTheirSizes) {
+    // Three bubbles of radius 0.45 in a window 1 mm thick and 2 mm across: each fits alone (centre
+    // within 0.05 mm of the mid-plane, 0.55 mm of the axis), and three would need centres 0.9 mm
+    // apart within 0.55 mm of the axis: an equilateral triangle of circumradius 0.52, a room no
+    // random placement finds.
+    const DatasetSpec s = parse_dataset_spec(R"(scene:
+  object: {type: window, thickness: 1.0, diameter: 2.0, ior: 1.5}
+samples: 1
+defects:
+  - {type: bubble, count: 3, radius: 0.45}
+max_attempts: 200
+)",
+                                             "spec.yaml");
+    const InputError e = draw_error(s, 0);
+    EXPECT_EQ(e.line, 5);
+    EXPECT_EQ(e.key_path, "defects[0]");
+    const std::string m = e.what();
+    EXPECT_NE(m.find("sample 0: its 3 defects do not fit together: 100 rounds of placing all of them, 200 positions "
+                     "per defect, found no room for the bubble with radius 0.45"),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("The sizes, kept in every round: bubble (radius 0.45); bubble (radius 0.45); bubble (radius 0.45)"),
+              std::string::npos)
+        << m;
+}
+
+TEST(Sampler, ASizeRangeReachingBeyondTheObjectIsAnErrorAtItsKey) {
+    // Radii up to 0.6 in a 1 mm window: a radius >= 0.5 fits nowhere (a bubble must stay clear of
+    // both faces). With sizes redrawn until they fit, every sample would quietly draw below 0.5.
+    const DatasetSpec s = parse_dataset_spec(R"(scene:
+  object: {type: window, thickness: 1.0, diameter: 25.0, ior: 1.5}
+samples: 100
+defects:
+  - type: bubble
+    radius: {uniform: [0.3, 0.6]}
+)",
+                                             "spec.yaml");
+    bool thrown = false;
+    for (long i = 0; i < s.samples && !thrown; ++i) {
+        try {
+            draw_sample(s, i);
+        } catch (const InputError& e) {
+            thrown = true;
+            EXPECT_EQ(e.file, "spec.yaml");
+            EXPECT_EQ(e.line, 6);
+            EXPECT_EQ(e.column, 13);
+            EXPECT_EQ(e.key_path, "defects[0].radius");
+            const std::string m = e.what();
+            const auto at = m.find("a bubble with radius ");
+            ASSERT_NE(at, std::string::npos) << m;
+            // A radius r leaves 1 - 2r of the thickness for the centre: below 1/1000 of it (what
+            // 1000 positions would likely miss) only for r > 0.4995.
+            EXPECT_GT(std::stod(m.substr(at + 21)), 0.4995) << m;
+            EXPECT_NE(m.find(fmt::format("(sample {}) fits nowhere in the object", i)), std::string::npos) << m;
+        }
+    }
+    EXPECT_TRUE(thrown);
+}
+
+// ---- the dataset card ----
+
+TEST(DatasetCard, ShowsEverySampledParametersRequestedAndRealisedLawWithItsTest) {
+    const DatasetSpec spec = parse_dataset_spec(spec_text(R"(samples: 3
+defect_free_fraction: 0.25
+defects:
+  - {type: bubble, count: {uniform_int: [1, 2]}, radius: {uniform: [0.1, 0.5]}}
+  - {type: scratch, count: 1, width: 0.05, shape: straight, profile: {choice: [V, U]}}
+)"),
+                                                "spec.yaml");
+    // Three samples (labels.json as the dataset writes them, cut to what the card reads): radii
+    // 0.2, 0.3, 0.45; scratch profiles V, V, U and one more V; widths all 0.05; one defect-free.
+    const auto defect = [](int entry, const char* kind, io::Json sampled) {
+        return io::Json{{"kind", kind}, {"spec_entry", entry}, {"pixel_area", 1},
+                        {"parameters", {{"size", 0.1}}}, {"sampled", std::move(sampled)}};
+    };
+    const auto scratch = [&](const char* profile) {
+        return defect(1, "scratch", {{"surface", "front"}, {"width", 0.05}, {"depth", 0.02}, {"profile", profile},
+                                     {"shape", "straight"}, {"length", 2.0}});
+    };
+    std::vector<io::Json> labels = {
+        {{"split", "train"}, {"defect_free", false},
+         {"defects", {defect(0, "bubble", {{"radius", 0.2}}), defect(0, "bubble", {{"radius", 0.3}}), scratch("V")}}},
+        {{"split", "train"}, {"defect_free", false}, {"defects", {defect(0, "bubble", {{"radius", 0.45}}), scratch("V")}}},
+        {{"split", "train"}, {"defect_free", false}, {"defects", {scratch("U"), scratch("V")}}},
+        {{"split", "train"}, {"defect_free", true}, {"defects", io::Json::array()}},
+    };
+    const io::Json identity = {{"seed", 1}, {"requested", requested_parameters(spec)}};
+    const auto dir = std::filesystem::temp_directory_path() / fmt::format("ltm-card-{}", ::getpid());
+    write_dataset_card(dir.string(), identity, "samples: 3\n", labels, 4, {}, {});
+    std::ifstream in(dir / "README.md");
+    const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::filesystem::remove_all(dir);
+    // Radii against U(0.1, 0.5): F = 0.25, 0.5, 0.875, so D = max(0.25 - 0, 1/3 - 0.25, 0.5 - 1/3,
+    // 2/3 - 0.5, 0.875 - 2/3, 1 - 0.875) = 0.25; n D = 0.75, where P(D_3 < D) = 3!/3^3 (2 n D - 1)^3
+    // = 1/36 (Ruben-Gambino): p = 0.97.
+    EXPECT_NE(md.find("| defects[0] bubble radius | {uniform: [0.1, 0.5]} | 3 | 0.2 | 0.3 | 0.45 | 0.3167 | D = 0.2500 | 0.97 |"),
+              std::string::npos)
+        << md;
+    // A constant: every value equal to it.
+    EXPECT_NE(md.find("| defects[1] scratch width | 0.05 | 4 | 0.05 | 0.05 | 0.05 | 0.05 | constant | all equal |"),
+              std::string::npos)
+        << md;
+    // Profiles V 3, U 1 against 2 each: chi2 = (1 + 1) / 2 = 1 on 1 dof, p = erfc(sqrt(1/2)) = 0.32.
+    EXPECT_NE(md.find("| defects[1] scratch profile | {choice: [V, U]} | 4 | V 3, U 1 | chi2 = 1 (1 dof) | 0.32 |"),
+              std::string::npos)
+        << md;
+    // Counts per sample that is not defect-free: bubbles 2, 1, 0.
+    EXPECT_NE(md.find("| defects[0] bubble count | {uniform_int: [1, 2]} | 3 | 0 | 1 | 2 | 1 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("- defect-free samples: 1 (requested share 0.25: 1.0 expected)"), std::string::npos) << md;
 }
 
 // ---- COCO RLE ----
