@@ -1,7 +1,8 @@
 // `ltmsim mesh SCENE -o FILE.{ply,obj,off}`: the object with its defects, for MeshLab and meshio
 // (what each format carries: geometry/MeshExport.h); with TetGen-meshed index regions also
 // FILE.vtu (the tetrahedra with n per vertex, for ParaView and meshio), and the regions'
-// boundaries appended to the surface mesh.
+// boundaries appended to the surface mesh. Like every command, it replaces no existing output
+// without --overwrite.
 #include <algorithm>
 #include <array>
 #include <filesystem>
@@ -21,7 +22,7 @@ namespace {
 
 struct MeshArgs {
     std::string scene, output, stats;
-    bool ascii = false, binary = false, verbose = false;
+    bool ascii = false, binary = false, verbose = false, overwrite = false;
     int threads = 0;
 };
 
@@ -115,14 +116,17 @@ int run(const MeshArgs& a) {
             return 2;
         }
     }
+    if (!outputs_may_be_written("mesh", {a.output, a.stats}, a.overwrite)) return 2;
     StageReport report;
     int status = 0;
     auto loaded = load_scene_and_solid(a.scene, report, status);
     if (!loaded) return status;
     const Scene& scene = loaded->scene;
     const Solid& solid = loaded->solid;
+    // FILE.vtu is written only for a scene with meshed index regions, which only the solid tells.
     const std::string vtu =
         solid.regions.empty() ? std::string() : std::filesystem::path(a.output).replace_extension(".vtu").string();
+    if (!outputs_may_be_written("mesh", {vtu}, a.overwrite)) return 2;
     TriMesh picture;
     {
         StageTimer t(&report, "write");
@@ -164,6 +168,7 @@ void add_mesh_command(CLI::App& app) {
         ->required();
     CLI::Option* ascii = cmd->add_flag("--ascii", args->ascii, "ASCII PLY, the default: geometry, face colours by role, tags");
     cmd->add_flag("--binary", args->binary, "Binary PLY (float64): geometry only, no colours or tags")->excludes(ascii);
+    cmd->add_flag("--overwrite", args->overwrite, "Replace existing output files (the mesh, FILE.vtu, --stats)");
     cmd->add_option("--stats", args->stats, "Also write, as JSON to this file, the written file's counts and volume and the stage times and sizes");
     cmd->add_flag("-v,--verbose", args->verbose, "Print the stages that ran, with times and sizes");
     cmd->add_option("--threads", args->threads, "Threads (meshing is sequential; accepted for uniformity)")

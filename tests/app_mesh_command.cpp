@@ -1,6 +1,7 @@
 // The `ltmsim mesh` command's contract (docs/conventions.md, "Command line"): formats, the stage
-// report, exit status 2 with a file:line:key message for bad input, never a partial file, and
-// every format read by meshio and MeshLab as the mesh the program holds.
+// report, exit status 2 with a file:line:key message for bad input, never a partial file, no
+// existing output replaced without --overwrite, and every format read by meshio and MeshLab as
+// the mesh the program holds.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -18,6 +19,7 @@
 #include "io/Json.h"
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
+#include "tests/SceneFixture.h"
 #include "tests/TestSupport.h"
 #include "tests/Tolerances.h"
 
@@ -129,12 +131,55 @@ TEST_F(MeshCommand, BadOutputPathsExitTwo) {
     EXPECT_TRUE(outputs().empty());
 }
 
+// Even with --overwrite, a run that fails leaves the file it would have replaced as it was.
 TEST_F(MeshCommand, FailureLeavesAnExistingFileUntouched) {
     const fs::path keep = dir / "keep.ply";
     std::ofstream(keep) << "the user's own file";
     const fs::path bad = write("bad.yaml", "object: {type: lens}\n");
-    EXPECT_EQ(ltmsim("mesh " + bad.string() + " -o " + keep.string(), dir).status, 2);
+    EXPECT_EQ(ltmsim("mesh " + bad.string() + " -o " + keep.string() + " --overwrite", dir).status, 2);
     EXPECT_EQ(slurp(keep), "the user's own file");
+}
+
+// As every command (render, acquire, experiment): an existing output -- the mesh, the --stats
+// file, or FILE.vtu of a scene with meshed index regions -- is not replaced without --overwrite;
+// the run exits 2 naming it, before writing anything. With --overwrite all are replaced.
+TEST_F(MeshCommand, ExistingOutputsNeedOverwrite) {
+    const std::string mine = "the user's own file";
+    const std::string mesh = path("m.ply"), stats = path("m.json");
+    // The mesh exists.
+    spit(mesh, mine);
+    Outcome r = ltmsim("mesh " + scene("default.yaml") + " -o " + mesh + " --stats " + stats, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("ltmsim mesh: " + mesh + " exists; pass --overwrite to replace it"), std::string::npos)
+        << r.err;
+    EXPECT_TRUE(slurp(mesh) == mine) << "the existing mesh was replaced";
+    EXPECT_FALSE(fs::exists(stats));
+    // The --stats file exists (and the mesh does not).
+    fs::remove(mesh);
+    spit(stats, mine);
+    r = ltmsim("mesh " + scene("default.yaml") + " -o " + mesh + " --stats " + stats, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(stats + " exists; pass --overwrite"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(mesh));
+    EXPECT_TRUE(slurp(stats) == mine) << "the existing --stats file was replaced";
+    // With --overwrite both are written.
+    spit(mesh, mine);
+    ASSERT_EQ(ltmsim("mesh " + scene("default.yaml") + " -o " + mesh + " --stats " + stats + " --overwrite", dir).status, 0);
+    EXPECT_EQ(slurp(mesh).rfind("ply\n", 0), 0u);
+    EXPECT_NE(slurp(stats).find("\"triangles\""), std::string::npos);
+
+    // FILE.vtu, written for a scene with a TetGen-meshed inhomogeneity: refused before the mesh is written.
+    const fs::path incl = write("incl.yaml", ltm::test::kSmallSmoothInclusion);
+    const std::string grin = path("g.off"), vtu = path("g.vtu");
+    spit(vtu, mine);
+    r = ltmsim("mesh " + incl.string() + " -o " + grin, dir);
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find(vtu + " exists; pass --overwrite"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(grin));
+    EXPECT_TRUE(slurp(vtu) == mine) << "the existing FILE.vtu was replaced";
+    ASSERT_EQ(ltmsim("mesh " + incl.string() + " -o " + grin + " --overwrite", dir).status, 0);
+    EXPECT_NE(slurp(vtu).find("<UnstructuredGrid>"), std::string::npos);
+    EXPECT_EQ(slurp(grin).rfind("OFF\n", 0), 0u);
 }
 
 TEST_F(MeshCommand, BinaryIsForPlyAndExcludesAscii) {
