@@ -117,7 +117,7 @@ void validate(const std::string& path, const TriMesh& mesh, const SurfaceTable& 
     const size_t nv = mesh.vertices.size();
     // PLY's vertex_indices are "int" (the type every PLY reader knows), so vertex numbers stop at 2^31 - 1.
     if (nv > static_cast<size_t>(std::numeric_limits<std::int32_t>::max()) + 1)
-        fail(fmt::format("the mesh has {} vertices, more than PLY's int indices number", nv));
+        fail(fmt::format("the mesh has {} vertices, but PLY's int vertex indices reach 2^31 - 1", nv));
     for (size_t v = 0; v < nv; ++v)
         if (!is_finite(mesh.vertices[v]))
             fail(fmt::format("vertex {} has a non-finite coordinate ({}, {}, {})", v, mesh.vertices[v].x,
@@ -132,6 +132,12 @@ void validate(const std::string& path, const TriMesh& mesh, const SurfaceTable& 
             fail(fmt::format("triangle {} has tag {}, outside the surface table ({} entries)", f, tag,
                              table.size()));
     }
+}
+
+// One vertex as text: `prefix` ("" or "v "), then x, y and z with 17 significant digits, which
+// print every double exactly (max_digits10), so that a correctly rounding reader gets it back.
+void print_vertex(ExportWriter& out, const char* prefix, const Vec3& p) {
+    out.print("{}{:.17g} {:.17g} {:.17g}\n", prefix, p.x, p.y, p.z);
 }
 
 // The header comments every format that has comments starts with (PLY "comment", OBJ '#').
@@ -178,7 +184,7 @@ void write_ply(ExportWriter& out, const TriMesh& mesh, const SurfaceTable& table
         }
         return;
     }
-    for (const Vec3& p : mesh.vertices) out.print("{:.17g} {:.17g} {:.17g}\n", p.x, p.y, p.z);
+    for (const Vec3& p : mesh.vertices) print_vertex(out, "", p);
     for (size_t f = 0; f < mesh.triangles.size(); ++f) {
         const auto& t = mesh.triangles[f];
         const auto rgb = role_colour(table[mesh.tags[f]].role);
@@ -189,7 +195,7 @@ void write_ply(ExportWriter& out, const TriMesh& mesh, const SurfaceTable& table
 // OFF: "OFF", then "vertices faces edges" (edges 0: OFF readers ignore the count), vertices, faces.
 void write_off(ExportWriter& out, const TriMesh& mesh) {
     out.print("OFF\n{} {} 0\n", mesh.vertices.size(), mesh.triangles.size());
-    for (const Vec3& p : mesh.vertices) out.print("{:.17g} {:.17g} {:.17g}\n", p.x, p.y, p.z);
+    for (const Vec3& p : mesh.vertices) print_vertex(out, "", p);
     for (const auto& t : mesh.triangles) out.print("3 {} {} {}\n", t[0], t[1], t[2]);
 }
 
@@ -197,9 +203,10 @@ void write_off(ExportWriter& out, const TriMesh& mesh) {
 void write_obj(ExportWriter& out, const TriMesh& mesh) {
     for (const std::string& c : common_comments()) out.print("# {}\n", c);
     out.print("# geometry only: face colours and surface tags are in the ASCII PLY\n");
-    for (const Vec3& p : mesh.vertices) out.print("v {:.17g} {:.17g} {:.17g}\n", p.x, p.y, p.z);
+    for (const Vec3& p : mesh.vertices) print_vertex(out, "v ", p);
     for (const auto& t : mesh.triangles) out.print("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
 }
+
 }  // namespace
 
 const char* to_string(MeshFormat f) {

@@ -8,8 +8,9 @@
 // in the TriMesh's order, so face i of the file is triangle i of the mesh. Nothing is merged or
 // split: a non-manifold mesh is written as it is (MeshLab then reports its non-manifold edges).
 //
-// What each format carries, chosen so that Debian's MeshLab (2020.09) and meshio (5.0) both read
-// every file (tests/app_mesh_command.cpp checks it, and tests/geometry_export.cpp each layout):
+// What each format carries, chosen so that Debian's meshio (5.0) reads every file and Debian's
+// MeshLab (2020.09) every PLY and OFF file (tests/app_mesh_command.cpp checks both on real
+// scenes, tests/geometry_export.cpp each layout):
 //   ASCII PLY (the default for .ply)  vertices (double x, y, z); faces with their vertex_indices
 //       (uchar count, int indices), one RGB colour (uchar red, green, blue: the colour of the role
 //       of the face's surface, role_colour()) and an int "tag" (the index into the SurfaceTable);
@@ -25,7 +26,7 @@
 //   OBJ  vertices and faces (1-based "f" lines), plus '#' comment lines with the units and axes.
 //       No colours: OBJ has colours only through a material library, a second file, which defeats
 //       the atomic single-file write. (Debian's MeshLab 2020.09 aborts on every OBJ file, its own
-//       included: Debian bug #1054006, MeshLab issue #1270; newer MeshLab and meshio read them.)
+//       included: Debian bug #1054006, MeshLab issue #1270. meshio reads them.)
 //
 // The writers are ltmsim's own, not OpenMesh's: OpenMesh 9 writes coordinates as 32-bit floats
 // even from a double mesh, labels face-coloured OFF "COFF", and splits non-manifold faces off
