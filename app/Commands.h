@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace ltm::app {
 
@@ -38,5 +39,11 @@ void set_exit_status(int status);
 // "Every command that computes takes --threads N". Its status becomes the exit status; an
 // exception that escapes is an internal error (status 1) reported as "ltmsim NAME: what".
 void run_guarded(const std::string& name, int threads, const std::function<int()>& body);
+
+// Whether a command may write the files `paths` (empty entries skipped): true if none of them
+// exists, or `overwrite` (the command's --overwrite) is set; otherwise prints "ltmsim COMMAND:
+// PATH exists; pass --overwrite to replace it" for the first that exists and returns false (exit
+// status 2, before anything is written).
+bool outputs_may_be_written(const std::string& command, const std::vector<std::string>& paths, bool overwrite);
 
 }  // namespace ltm::app

@@ -2,6 +2,7 @@
 #include <tbb/task_arena.h>
 
 #include <charconv>
+#include <filesystem>
 #include <iostream>
 
 #include "app/Commands.h"
@@ -53,6 +54,17 @@ void run_guarded(const std::string& name, int threads, const std::function<int()
         std::cerr << "ltmsim " << name << ": " << e.what() << "\n";
         set_exit_status(1);
     }
+}
+
+bool outputs_may_be_written(const std::string& command, const std::vector<std::string>& paths, bool overwrite) {
+    if (overwrite) return true;
+    for (const std::string& p : paths) {
+        std::error_code ec;
+        if (p.empty() || !std::filesystem::exists(p, ec)) continue;
+        std::cerr << fmt::format("ltmsim {}: {} exists; pass --overwrite to replace it\n", command, p);
+        return false;
+    }
+    return true;
 }
 
 }  // namespace ltm::app

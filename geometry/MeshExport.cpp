@@ -11,17 +11,18 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "geometry/ExportWriter.h"
 #include "io/AtomicFile.h"
 
 namespace ltm {
@@ -29,25 +30,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Double points so that the only rounding is the writer's own conversion to float; unsigned
-// char RGB face colours (PLY "uchar red/green/blue", OFF integer colours).
-struct ExportTraits : OpenMesh::DefaultTraits {
+// What OpenMesh reads into (read_mesh_summary): double points, unsigned char RGB face colours.
+struct ReadTraits : OpenMesh::DefaultTraits {
     using Point = OpenMesh::Vec3d;
     using Color = OpenMesh::Vec3uc;
     FaceAttributes(OpenMesh::Attributes::Color);
 };
-using OmMesh = OpenMesh::TriMesh_ArrayKernelT<ExportTraits>;
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<ReadTraits>;
 
 constexpr const char* kTagProperty = "tag";
-// float has 24 significand bits: 9 significant decimal digits print every float exactly
-// (max_digits10), so ASCII files hold the same float values as binary ones. OpenMesh's default
-// (6) would add up to 5e-7 relative on top of the float rounding.
-constexpr std::streamsize kAsciiPrecision = 9;
 
-// OpenMesh reports problems on its own process-wide streams (omerr for errors, omlog for chatter
-// like "[OBJWriter] : write file"), by default onto std::cerr / std::clog. During one of our
-// calls they are redirected into a string, which goes into the exception text on failure and is
-// dropped on success. The mutex serialises our calls, as the streams are global.
+// OpenMesh reports problems on its own process-wide streams (omerr for errors, omlog for its
+// readers' chatter), by default onto std::cerr / std::clog. During one of our calls they are
+// redirected into a string, which goes into the exception text on failure and is dropped on
+// success. The mutex serialises our calls, as the streams are global.
 std::mutex g_openmesh_io_mutex;
 
 class OpenMeshMessages {
@@ -105,23 +101,13 @@ std::string one_line(std::string s) {
     return s;
 }
 
-const char* extension_of(MeshFormat f) {
-    switch (f) {
-        case MeshFormat::PlyBinary:
-        case MeshFormat::PlyAscii: return ".ply";
-        case MeshFormat::Obj: return ".obj";
-        case MeshFormat::Off: return ".off";
-    }
-    return "";
-}
-
 // The folder a path lives in ("." for a bare file name).
 fs::path folder_of(const std::string& path) {
     const fs::path parent = fs::path(path).parent_path();
     return parent.empty() ? fs::path(".") : parent;
 }
 
-// Everything that could make the export wrong or crash OpenMesh, checked before any file exists.
+// Everything that could make the export wrong, checked before any file exists.
 void validate(const std::string& path, const TriMesh& mesh, const SurfaceTable& table) {
     auto fail = [&](const std::string& why) {
         throw std::runtime_error(fmt::format("cannot write mesh '{}': {}", path, why));
@@ -129,6 +115,9 @@ void validate(const std::string& path, const TriMesh& mesh, const SurfaceTable& 
     if (mesh.tags.size() != mesh.triangles.size())
         fail(fmt::format("the mesh has {} triangles but {} tags", mesh.triangles.size(), mesh.tags.size()));
     const size_t nv = mesh.vertices.size();
+    // PLY's vertex_indices are "int" (the type every PLY reader knows), so vertex numbers stop at 2^31 - 1.
+    if (nv > static_cast<size_t>(std::numeric_limits<std::int32_t>::max()) + 1)
+        fail(fmt::format("the mesh has {} vertices, but PLY's int vertex indices reach 2^31 - 1", nv));
     for (size_t v = 0; v < nv; ++v)
         if (!is_finite(mesh.vertices[v]))
             fail(fmt::format("vertex {} has a non-finite coordinate ({}, {}, {})", v, mesh.vertices[v].x,
@@ -145,121 +134,105 @@ void validate(const std::string& path, const TriMesh& mesh, const SurfaceTable& 
     }
 }
 
-struct BuiltMesh {
-    OmMesh om;
-    OpenMesh::FPropHandleT<int> tag;
-    size_t faces_with_own_vertices = 0;
-};
+// One vertex as text: `prefix` ("" or "v "), then x, y and z with 17 significant digits, which
+// print every double exactly (max_digits10), so that a correctly rounding reader gets it back.
+void print_vertex(ExportWriter& out, const char* prefix, const Vec3& p) {
+    out.print("{}{:.17g} {:.17g} {:.17g}\n", prefix, p.x, p.y, p.z);
+}
 
-// Copies the TriMesh into OpenMesh, face by face in order (OpenMesh keeps insertion order for
-// vertices and faces, and starts each face's vertex circulation at its first vertex).
-void build(const TriMesh& mesh, const SurfaceTable& table, BuiltMesh& out) {
-    OmMesh& om = out.om;
-    om.reserve(mesh.vertices.size(), 3 * mesh.triangles.size() / 2, mesh.triangles.size());
-    std::vector<OmMesh::VertexHandle> vh;
-    vh.reserve(mesh.vertices.size());
-    for (const Vec3& p : mesh.vertices) vh.push_back(om.add_vertex(OmMesh::Point(p.x, p.y, p.z)));
+// The header comments every format that has comments starts with (PLY "comment", OBJ '#').
+std::vector<std::string> common_comments() {
+    return {"ltmsim mesh export",
+            "units mm; axes right-handed, +z is the optical axis, camera at -z, display at +z",
+            "vertex coordinates are the mesh's doubles exactly (float64 in binary, 17 significant digits in text)"};
+}
 
-    om.add_property(out.tag, kTagProperty);
-    om.property(out.tag).set_persistent(true);  // persistent custom properties go into PLY files
+// PLY (ASCII or binary little-endian). The header lines in the order the PLY grammar asks for:
+// "ply", "format ...", comments, then the elements with their properties. The face element of
+// the binary file has vertex_indices only (MeshExport.h says why).
+void write_ply(ExportWriter& out, const TriMesh& mesh, const SurfaceTable& table, bool binary) {
+    out.print("ply\nformat {} 1.0\n", binary ? "binary_little_endian" : "ascii");
+    std::vector<std::string> comments = common_comments();
+    if (binary) {
+        comments.push_back("geometry only: face colours and surface tags are in the ASCII PLY (ltmsim mesh without --binary)");
+    } else {
+        comments.push_back("face colour = role of the face's surface; face property tag = index into the legend below");
+        for (size_t i = 0; i < table.size(); ++i) {
+            const SurfaceInfo& s = table.entries[i];
+            const auto rgb = role_colour(s.role);
+            comments.push_back(one_line(fmt::format("tag {} = {} ({}, rgb {} {} {}, inside {} / outside {})", i, s.name,
+                                                    to_string(s.role), rgb[0], rgb[1], rgb[2], to_string(s.inside),
+                                                    to_string(s.outside))));
+        }
+    }
+    for (const std::string& c : comments) out.print("comment {}\n", c);
+    out.print("element vertex {}\nproperty double x\nproperty double y\nproperty double z\n"
+              "element face {}\nproperty list uchar int vertex_indices\n",
+              mesh.vertices.size(), mesh.triangles.size());
+    if (!binary) out.print("property uchar red\nproperty uchar green\nproperty uchar blue\nproperty int tag\n");
+    out.print("end_header\n");
 
+    if (binary) {
+        for (const Vec3& p : mesh.vertices) {
+            out.little_endian(p.x);
+            out.little_endian(p.y);
+            out.little_endian(p.z);
+        }
+        for (const auto& t : mesh.triangles) {
+            out.little_endian(std::uint8_t{3});
+            for (auto i : t) out.little_endian(static_cast<std::int32_t>(i));
+        }
+        return;
+    }
+    for (const Vec3& p : mesh.vertices) print_vertex(out, "", p);
     for (size_t f = 0; f < mesh.triangles.size(); ++f) {
         const auto& t = mesh.triangles[f];
-        OmMesh::FaceHandle fh = om.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
-        if (!fh.is_valid()) {
-            // Non-manifold (complex vertex / edge) or degenerate face: OpenMesh leaves the mesh
-            // unchanged and returns an invalid handle. Keep the face with its own vertices.
-            OmMesh::VertexHandle own[3];
-            // A copy of the point, not om.point()'s reference: add_vertex may grow the point
-            // array and read the reference after it moved (AddressSanitizer: heap-use-after-free).
-            for (int k = 0; k < 3; ++k) {
-                const OmMesh::Point p = om.point(vh[t[k]]);
-                own[k] = om.add_vertex(p);
-            }
-            fh = om.add_face(own[0], own[1], own[2]);
-            if (!fh.is_valid())
-                throw std::logic_error(fmt::format("OpenMesh rejected isolated triangle {}", f));
-            ++out.faces_with_own_vertices;
-        }
         const auto rgb = role_colour(table[mesh.tags[f]].role);
-        om.set_color(fh, OmMesh::Color(rgb[0], rgb[1], rgb[2]));
-        om.property(out.tag, fh) = mesh.tags[f];
+        out.print("3 {} {} {} {} {} {} {}\n", t[0], t[1], t[2], rgb[0], rgb[1], rgb[2], mesh.tags[f]);
     }
 }
 
-std::vector<std::string> ply_comments(const SurfaceTable& table, size_t faces_with_own_vertices) {
-    std::vector<std::string> c;
-    c.push_back("ltmsim mesh export");
-    c.push_back("units mm; axes right-handed, +z is the optical axis, camera at -z, display at +z");
-    c.push_back("coordinates are float32: a picture for viewing, not geometry to re-read");
-    c.push_back("face colour = role of the face's surface; face property tag = index into the legend below");
-    for (size_t i = 0; i < table.size(); ++i) {
-        const SurfaceInfo& s = table.entries[i];
-        const auto rgb = role_colour(s.role);
-        c.push_back(one_line(fmt::format("tag {} = {} ({}, rgb {} {} {}, inside {} / outside {})", i, s.name,
-                                         to_string(s.role), rgb[0], rgb[1], rgb[2], to_string(s.inside),
-                                         to_string(s.outside))));
-    }
-    if (faces_with_own_vertices > 0)
-        c.push_back(fmt::format("warning: {} faces did not fit a manifold surface and were written with their "
-                                "own copies of their vertices",
-                                faces_with_own_vertices));
-    return c;
+// OFF: "OFF", then "vertices faces edges" (edges 0: OFF readers ignore the count), vertices, faces.
+void write_off(ExportWriter& out, const TriMesh& mesh) {
+    out.print("OFF\n{} {} 0\n", mesh.vertices.size(), mesh.triangles.size());
+    for (const Vec3& p : mesh.vertices) print_vertex(out, "", p);
+    for (const auto& t : mesh.triangles) out.print("3 {} {} {}\n", t[0], t[1], t[2]);
 }
 
-// OpenMesh's PLY writer has no header comments. The header is ASCII lines up to and including
-// "end_header\n" (also in binary PLY); comments go right after the "format ..." line, which the
-// PLY grammar requires second (after "ply"). The body is kept byte for byte.
-std::string insert_ply_comments(const std::string& ply, const std::vector<std::string>& comments) {
-    const std::string end_marker = "end_header\n";
-    const size_t header_end = ply.find(end_marker);
-    if (ply.compare(0, 4, "ply\n") != 0 || header_end == std::string::npos)
-        throw std::logic_error("OpenMesh's PLY output has no 'ply' line or no 'end_header' line");
-    const size_t format_at = ply.find("\nformat ");
-    if (format_at == std::string::npos || format_at > header_end)
-        throw std::logic_error("OpenMesh's PLY output has no 'format' line");
-    const size_t after_format = ply.find('\n', format_at + 1) + 1;
-    std::string block;
-    for (const auto& c : comments) block += "comment " + c + "\n";
-    std::string out;
-    out.reserve(ply.size() + block.size());
-    out.append(ply, 0, after_format);
-    out += block;
-    out.append(ply, after_format, std::string::npos);
-    return out;
-}
-
-// OBJ comments are '#' lines anywhere; they go first, before OpenMesh's "# n vertices" line.
-std::string prepend_obj_comments(const std::string& obj) {
-    return "# ltmsim mesh export\n"
-           "# units mm; axes right-handed, +z is the optical axis, camera at -z, display at +z\n"
-           "# coordinates are float32: a picture for viewing, not geometry to re-read\n"
-           "# geometry only: face colours and surface tags are in the PLY export\n" +
-           obj;
+// OBJ: '#' comments, "v x y z", then "f a b c" with 1-based vertex numbers.
+void write_obj(ExportWriter& out, const TriMesh& mesh) {
+    for (const std::string& c : common_comments()) out.print("# {}\n", c);
+    out.print("# geometry only: face colours and surface tags are in the ASCII PLY\n");
+    for (const Vec3& p : mesh.vertices) print_vertex(out, "v ", p);
+    for (const auto& t : mesh.triangles) out.print("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
 }
 
 }  // namespace
 
 const char* to_string(MeshFormat f) {
     switch (f) {
-        case MeshFormat::PlyBinary: return "binary PLY";
         case MeshFormat::PlyAscii: return "ASCII PLY";
+        case MeshFormat::PlyBinary: return "binary PLY";
         case MeshFormat::Obj: return "OBJ";
-        case MeshFormat::Off: return "ASCII OFF";
+        case MeshFormat::Off: return "OFF";
     }
     return "?";
 }
 
-MeshFormat mesh_format_for(const std::string& path, bool ascii_ply) {
+MeshFormat mesh_format_for(const std::string& path, bool binary_ply) {
     const std::string ext = lower(fs::path(path).extension().string());
-    if (ext == ".ply") return ascii_ply ? MeshFormat::PlyAscii : MeshFormat::PlyBinary;
-    if (ext == ".obj") return MeshFormat::Obj;
-    if (ext == ".off") return MeshFormat::Off;
-    const std::string what = ext.empty() ? std::string("has no extension")
-                                         : fmt::format("has the unsupported extension '{}'",
-                                                       fs::path(path).extension().string());
-    throw std::invalid_argument(
-        fmt::format("mesh file '{}' {}: supported are .ply (colours, tags and legend), .obj, .off", path, what));
+    if (ext == ".ply") return binary_ply ? MeshFormat::PlyBinary : MeshFormat::PlyAscii;
+    if (ext != ".obj" && ext != ".off") {
+        const std::string what = ext.empty() ? std::string("has no extension")
+                                             : fmt::format("has the unsupported extension '{}'",
+                                                           fs::path(path).extension().string());
+        throw std::invalid_argument(fmt::format(
+            "mesh file '{}' {}: supported are .ply (colours, tags and legend), .obj, .off", path, what));
+    }
+    if (binary_ply)
+        throw std::invalid_argument(fmt::format(
+            "mesh file '{}': binary output applies to .ply only (OBJ and OFF are text formats)", path));
+    return ext == ".obj" ? MeshFormat::Obj : MeshFormat::Off;
 }
 
 void write_mesh(const std::string& path, const TriMesh& mesh, const SurfaceTable& table, MeshFormat format) {
@@ -274,30 +247,16 @@ void write_mesh(const std::string& path, const TriMesh& mesh, const SurfaceTable
             fmt::format("cannot write mesh '{}': '{}' is not a folder", path, folder.string()));
     validate(path, mesh, table);
 
-    OpenMeshMessages messages;
-    BuiltMesh built;
-    build(mesh, table, built);
-
-    OpenMesh::IO::Options opt = OpenMesh::IO::Options::Default;
-    if (format != MeshFormat::Obj) opt += OpenMesh::IO::Options::FaceColor;  // OBJ: would need a .mtl file
-    if (format == MeshFormat::PlyBinary) opt += OpenMesh::IO::Options::Binary;
-    // Written to memory first: OpenMesh never touches the file system, and the PLY header can be
-    // amended before anything reaches the disk.
-    std::ostringstream os(std::ios::out | std::ios::binary);
-    if (!OpenMesh::IO::write_mesh(built.om, os, extension_of(format), opt, kAsciiPrecision) || !os)
-        throw std::runtime_error(fmt::format("cannot write mesh '{}': OpenMesh's {} writer failed{}", path,
-                                             to_string(format), messages.text()));
-    std::string bytes = os.str();
+    io::AtomicFile file(path, "mesh");
+    ExportWriter out(file);
     switch (format) {
-        case MeshFormat::PlyBinary:
-        case MeshFormat::PlyAscii:
-            bytes = insert_ply_comments(bytes, ply_comments(table, built.faces_with_own_vertices));
-            break;
-        case MeshFormat::Obj: bytes = prepend_obj_comments(bytes); break;
-        // OFF: '#' comments are a Geomview extension that not every OFF reader skips.
-        case MeshFormat::Off: break;
+        case MeshFormat::PlyAscii: write_ply(out, mesh, table, false); break;
+        case MeshFormat::PlyBinary: write_ply(out, mesh, table, true); break;
+        case MeshFormat::Obj: write_obj(out, mesh); break;
+        case MeshFormat::Off: write_off(out, mesh); break;
     }
-    io::write_file(path, bytes, "mesh");
+    out.flush();
+    file.commit();
 }
 
 MeshFileSummary read_mesh_summary(const std::string& path) {

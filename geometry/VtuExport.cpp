@@ -2,11 +2,11 @@
 
 #include <cmath>
 #include <filesystem>
-#include <iterator>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "geometry/ExportWriter.h"
 #include "io/AtomicFile.h"
 
 namespace ltm {
@@ -14,30 +14,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr size_t kBlockBytes = size_t{1} << 20;
-
 [[noreturn]] void fail(const std::string& path, const std::string& why) {
     throw std::runtime_error(fmt::format("cannot write VTU file '{}': {}", path, why));
 }
-
-// Text accumulated in blocks of about kBlockBytes and written out as each fills.
-class BlockWriter {
-public:
-    explicit BlockWriter(io::AtomicFile& file) : file_(file) { buf_.reserve(kBlockBytes + 4096); }
-    template <class... Args>
-    void print(fmt::format_string<Args...> f, Args&&... args) {
-        fmt::format_to(std::back_inserter(buf_), f, std::forward<Args>(args)...);
-        if (buf_.size() >= kBlockBytes) flush();
-    }
-    void flush() {
-        file_.write(buf_);
-        buf_.clear();
-    }
-
-private:
-    io::AtomicFile& file_;
-    std::string buf_;
-};
 
 void validate(const std::string& path, const TetMesh& mesh) {
     const size_t nv = mesh.vertices.size();
@@ -65,7 +44,7 @@ void write_vtu(const std::string& path, const TetMesh& mesh) {
     validate(path, mesh);
 
     io::AtomicFile file(path, "VTU file");
-    BlockWriter out(file);
+    ExportWriter out(file);
     const size_t nv = mesh.vertices.size(), nt = mesh.tets.size();
     // Version 0.1 is the one every VTK XML reader knows (meshio accepts 0.1 and 1.0; the two differ
     // only in features not used here). byte_order and header_type are irrelevant to ASCII data

@@ -27,6 +27,17 @@ inline Built build(const std::string& yaml, const std::string& file_name = "test
     return b;
 }
 
+// A small smooth inclusion in a window, meshed coarsely (a fast TetGen stage, a few thousand
+// tetrahedra), and a small camera: for the commands that mesh, write or trace such a region.
+inline const char* const kSmallSmoothInclusion = R"(
+object: {type: window, thickness: 4.0, diameter: 12.0, ior: 1.5}
+defects:
+  - {type: inhomogeneity, center: [0.0, 0.0, 0.0], radius: 1.5, delta_n: 0.02, profile: smooth}
+camera: {resolution: [24, 24], size: [6.0, 6.0], numerical_aperture: 0.002, samples_per_pixel: 4}
+display: {resolution: [100, 100], size: [50.0, 50.0], z: 40.0}
+mesh: {index_tolerance: 2e-3}
+)";
+
 // A window with a V scratch on its front face: the glass is a Boolean result, its first segments
 // meet the scratch's walls (which support nothing: the mesh lies on both sides of them).
 inline const char* const kScratchedWindow = R"(

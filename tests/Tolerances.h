@@ -34,12 +34,25 @@ inline double face_on_surface(double chord_error, double scale) { return chord_e
 // 1.5 eps; 1.5 eps = 3 x 2^-53 in absolute terms, both results being at most 1.
 constexpr double kTurnCosSin = 1.5 * kEps;
 
-// Exported mesh files (geometry/MeshExport.h) hold float32 coordinates: OpenMesh rounds each double
-// to the nearest float when writing (ASCII is printed with 9 significant digits, float's
-// max_digits10, so it holds the same float). Rounding to nearest binary32 moves x by at most half
-// an ulp, i.e. the unit roundoff 2^-24 relative: |float(x) - x| <= 2^-24 |x| <= 2^-24 L for
-// coordinates of magnitude at most L.
-inline double float_export(double scale) { return std::ldexp(scale, -24); }
+// app_mesh_command: MeshLab 2020.09's "Mesh Volume" of an exported mesh against the mesh's own
+// signed volume V. MeshLab holds coordinates as float (CMeshO) and integrates the volume with
+// Mirtich's algorithm (vcg/complex/algorithms/inertia.h) in double from those floats, each face's
+// plane given by its float unit normal through its first vertex; it returns a float, printed
+// with 6 decimals. With u = 2^-24 (float's unit roundoff), L the largest |coordinate|, A the area:
+//  - rounding each coordinate to float moves a vertex by at most sqrt(3) u L, so the surface
+//    sweeps at most sqrt(3) u L A of volume;
+//  - a face's float unit normal (edges of length <= d, area a, so |e1 x e2| = 2a) is off by at
+//    most 3 u d^2 / (2a) (each component of the cross product within 3 u |e1| |e2| <= 3 u d^2)
+//    plus 2 u (the normalisation); the plane through the first vertex then tilts by at most
+//    sqrt(3) |dn| d over the face (Mirtich solves for the normal's largest component,
+//    |n_C| >= 1/sqrt(3)): at most sqrt(3) u (1.5 d^3 + 2 a d) of volume per face;
+//  - the float result, u |V|; the printing, 5e-7; the double integration (~1e-16 relative) is
+//    far below these.
+// `face_terms` is the sum over faces of 1.5 d^3 + 2 a d. The bound is doubled for the second-order
+// terms and the float differences of the edges (relative u each).
+inline double meshlab_volume(double volume, double scale, double area, double face_terms) {
+    return 2.0 * (std::ldexp(std::fabs(volume) + std::sqrt(3.0) * (scale * area + face_terms), -24) + 5e-7);
+}
 
 // Rec. 709 luminance of a float RGB pixel (io/Image.h, pattern_values): the code evaluates
 // Y = 0.2126 R + 0.7152 G + 0.0722 B in double and rounds to float. With S = 0.2126|R| +

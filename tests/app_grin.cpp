@@ -9,6 +9,7 @@
 #include <regex>
 
 #include "geometry/MeshExport.h"
+#include "tests/SceneFixture.h"
 #include "tests/TestSupport.h"
 
 namespace fs = std::filesystem;
@@ -21,15 +22,7 @@ using ltm::test::slurp;
 
 Outcome ltmsim(const std::string& args, const fs::path& dir) { return ltm::test::ltmsim(args, dir, Capture::StderrOnly); }
 
-// A small smooth inclusion in a window, meshed coarsely (a fast test), and a small camera.
-const char* kInclusion = R"(
-object: {type: window, thickness: 4.0, diameter: 12.0, ior: 1.5}
-defects:
-  - {type: inhomogeneity, center: [0.0, 0.0, 0.0], radius: 1.5, delta_n: 0.02, profile: smooth}
-camera: {resolution: [24, 24], size: [6.0, 6.0], numerical_aperture: 0.002, samples_per_pixel: 4}
-display: {resolution: [100, 100], size: [50.0, 50.0], z: 40.0}
-mesh: {index_tolerance: 2e-3}
-)";
+const char* const kInclusion = ltm::test::kSmallSmoothInclusion;
 
 // The same inclusion clipped by the front face (its centre 0.5 mm below it): rays from the air
 // meet the part of its boundary outside the glass (no medium change there) and enter it through
