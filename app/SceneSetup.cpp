@@ -24,6 +24,10 @@ std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageRe
     }
     try {
         out.solid = build_solid(out.scene, &report, surfaces_only);
+    } catch (const SceneError& e) {
+        std::cerr << e.what() << "\n";
+        status = 2;
+        return std::nullopt;
     } catch (const std::invalid_argument& e) {
         std::cerr << fmt::format("{}: {}\n", out.scene.source, e.what());
         status = 2;

@@ -39,6 +39,17 @@ public:
     Scene run(const YAML::Node& root, bool whole_file) const;
 
 private:
+    // Reader::walk, keeping where each entry's value is (Scene::locations).
+    void walk(const YAML::Node& map, const std::string& path, const KeyRule& rule,
+              const std::function<void(const Item&)>& visit) const {
+        Reader::walk(map, path, rule, [&](const Item& e) {
+            const Loc at = e.value_loc();
+            locations_[join_path(path, e.key)] = {at.line, at.column};
+            visit(e);
+        });
+    }
+    mutable std::map<std::string, SourceLocation> locations_;
+
     // [x, y] or [x, y, z] (a point of a face; `has_z` says whether z was given).
     Vec3 point23(const Item& it, const std::string& path, bool& has_z) const;
 
@@ -591,6 +602,8 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
                 const YAML::Node node = e.value[i];
                 const std::string path = fmt::format("defects[{}]", i);
                 Where where;
+                const Loc node_loc = loc_of(node);
+                locations_[path] = {node_loc.line, node_loc.column};
                 scene.defects.push_back(parse_defect(node, path, where));
                 pending.push_back({i, std::move(where), loc_of(node)});
                 if (have_object) check_pending();
@@ -611,6 +624,8 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     });
     if (!have_object) fail(loc_of(root), "object", "missing required key 'object'");
     if (!have_display) check_display(scene.object, scene.display, loc_of(root), false);
+    scene.locations = std::move(locations_);
+    scene.key_prefix = prefix();
     return scene;
 }
 
@@ -626,5 +641,16 @@ Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for
 }
 
 Scene load_scene(const std::string& path) { return parse_scene(yaml::read_file(path, "scene file"), path); }
+
+InputError scene_error(const Scene& scene, const std::string& key, const std::string& message) {
+    const std::string path = join_path(scene.key_prefix, key);
+    // The value of the key, or of its nearest enclosing key in the file ("defects[2].radius" ->
+    // "defects[2]"), as the loader's own errors are located.
+    const std::string k =
+        yaml::enclosing_key(key, [&](const std::string& x) { return scene.locations.count(x) > 0; });
+    if (k.empty()) return InputError(scene.source, 0, 0, path, path.empty() ? message : path + ": " + message);
+    const SourceLocation at = scene.locations.at(k);
+    return InputError(scene.source, at.line, at.column, path, message);
+}
 
 }  // namespace ltm
