@@ -82,6 +82,9 @@ struct Scene {
     // Empty for a scene made in memory.
     std::map<std::string, SourceLocation> locations;
     std::string key_prefix;
+    // What the loader found odd but possible (docs/scene-format.md, "Warnings"): one line each,
+    // "FILE:LINE:COLUMN: warning: KEY: message". The commands print them to stderr.
+    std::vector<std::string> warnings;
 };
 
 }  // namespace ltm

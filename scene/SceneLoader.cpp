@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "defects/DefectSolid.h"
+#include "scene/CameraView.h"
 #include "scene/StrictYaml.h"
 
 namespace ltm {
@@ -48,6 +49,8 @@ private:
             visit(e);
         });
     }
+    // "FILE:LINE:COLUMN: warning: KEY: message" at the key's value (Scene::warnings).
+    std::string warning(const std::string& key, const std::string& message) const;
     mutable std::map<std::string, SourceLocation> locations_;
 
     // [x, y] or [x, y, z] (a point of a face; `has_z` says whether z was given).
@@ -550,6 +553,13 @@ void SceneParser::parse_tracing(const Item& it, TracingDesc& tracing) const {
              "applies only to 'estimator: split' (the estimator here is sample); remove it or add 'estimator: split'");
 }
 
+std::string SceneParser::warning(const std::string& key, const std::string& message) const {
+    const std::string k = yaml::enclosing_key(key, [&](const std::string& x) { return locations_.count(x) > 0; });
+    const std::string where =
+        k.empty() ? file() : fmt::format("{}:{}:{}", file(), locations_.at(k).line, locations_.at(k).column);
+    return fmt::format("{}: warning: {}: {}", where, join_path(prefix(), key), message);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The document
 
@@ -624,6 +634,8 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     });
     if (!have_object) fail(loc_of(root), "object", "missing required key 'object'");
     if (!have_display) check_display(scene.object, scene.display, loc_of(root), false);
+    for (const ViewWarning& w : view_warnings(scene.object, scene.camera, locations_.count("camera.size") > 0))
+        scene.warnings.push_back(warning(w.key, w.message));
     scene.locations = std::move(locations_);
     scene.key_prefix = prefix();
     return scene;
