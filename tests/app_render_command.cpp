@@ -326,6 +326,33 @@ TEST_F(RenderCommand, ExistingOutputsAreKeptUnlessOverwrite) {
     expect_outputs(out, {"ltm.npz", "run.json"});
 }
 
+// A successful render says on stdout, in one line, what it wrote where and how fast it traced:
+// here T of 20 x 20 camera pixels by 40 x 40 display pixels, 20 x 20 x 16 = 6400 camera paths.
+TEST_F(RenderCommand, OneSummaryLineOnSuccess) {
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(scene, out, "--threads 2"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(r.lines().size(), 1u) << r.out;
+    const std::string line = r.lines()[0];
+    EXPECT_EQ(line.rfind("ltmsim render: wrote " + out.string() + "/: ltm.npz (T 400 x 1600, ", 0), 0u) << line;
+    EXPECT_NE(line.find(" nonzeros), features.exr and features.npz ("), std::string::npos) << line;
+    EXPECT_NE(line.find(" images, previews in features/), reference.exr, run.json; 6400 paths in "), std::string::npos)
+        << line;
+    EXPECT_EQ(line.substr(line.size() - 9), " Mpaths/s") << line;
+    // A pattern's render names its image.
+    const fs::path png = dir / "white.png";
+    write_gray_png(png, kQ, kP, std::vector<std::uint8_t>(static_cast<std::size_t>(kP * kQ), 255));
+    const Outcome p = ltmsim(render(scene, dir / "img", "--threads 2 --no-previews --pattern '" + png.string() + "'"), dir);
+    ASSERT_EQ(p.status, 0) << p.err;
+    ASSERT_EQ(p.lines().size(), 1u) << p.out;
+    EXPECT_EQ(p.lines()[0].rfind("ltmsim render: wrote " + (dir / "img").string() +
+                                     "/: image.exr and image.npz (20 x 20 image of " + png.string() +
+                                     "), run.json; 6400 paths in ",
+                                 0),
+              0u)
+        << p.lines()[0];
+}
+
 // The first case: the lens in metres (diameter 0.025 mm) under 1.3 mm pixels renders a
 // flat image; the render goes on, and says so on stderr in one line naming the sizes and the unit.
 TEST_F(RenderCommand, ObjectSmallerThanAPixelWarns) {
