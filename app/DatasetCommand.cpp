@@ -87,6 +87,7 @@ int run(const DatasetArgs& a) {
     try {
         parse_shard(a.shard, o.shard, o.shards);
         spec = load_dataset_spec(a.input);
+        print_scene_warnings(spec.base);
         o.spec_text = yaml::read_file(a.input, "dataset spec");
         // The shard's samples are drawn now: a spec that cannot be met fails before anything is
         // rendered.

@@ -47,6 +47,7 @@ int run(const ExperimentArgs& a) {
         std::cerr << e.what() << "\n";
         return 2;
     }
+    for (const ExperimentScene& s : scenes) print_scene_warnings(s.scene);
     if (!output_folder_ok("experiment", a.out)) return 2;
     if (!a.overwrite && fs::exists(fs::path(a.out) / "contrast.csv")) {
         std::cerr << fmt::format("ltmsim experiment: {} holds results; pass --overwrite to replace them\n", a.out);

@@ -72,6 +72,23 @@ std::optional<std::size_t> parse_max_memory(const std::string& text, bool given)
     return bytes >= 1.8e19 ? std::numeric_limits<std::size_t>::max() : std::max<std::size_t>(1, static_cast<std::size_t>(bytes));
 }
 
+// The line a successful render prints on stdout: what it wrote where, and how fast it traced.
+std::string render_summary(const RenderArgs& a, const Scene& scene, const SceneRun& run) {
+    const RenderResult& r = run.render;
+    const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
+    std::string files;
+    if (a.pattern.empty())
+        files = fmt::format("ltm.npz (T {} x {}, {} nonzeros), features.exr and features.npz ({} images{}){}, run.json",
+                            static_cast<long>(N) * M, static_cast<long>(scene.display.resolution[0]) * scene.display.resolution[1],
+                            r.nnz, run.features.channels.size(), a.no_previews ? "" : ", previews in features/",
+                            scene.defects.empty() ? "" : ", reference.exr");
+    else
+        files = fmt::format("image.exr and image.npz ({} x {} image of {}){}, run.json", N, M, a.pattern,
+                            a.no_previews ? "" : ", image.png");
+    return fmt::format("ltmsim render: wrote {}: {}; {} paths in {:.3g} s, {:.3g} Mpaths/s", (fs::path(a.dir) / "").string(),
+                       files, r.stats.paths, r.seconds, r.stats.paths / std::max(r.seconds, 1e-9) / 1e6);
+}
+
 int run(const RenderArgs& a) {
     const std::optional<std::size_t> max_memory = parse_max_memory(a.max_memory, a.max_memory_given);
     if (!max_memory) return 2;
@@ -206,6 +223,7 @@ int run(const RenderArgs& a) {
         std::cerr << "ltmsim render: " << e.what() << "\n";
         return 1;
     }
+    std::cout << render_summary(a, scene, run) << std::endl;
     if (a.verbose) std::cerr << fmt::format("ltmsim render {} -> {}\n", a.scene, a.dir) << verbose_stages(report);
     if (r.stats.nan_events > 0) std::cerr << fmt::format("warning: {} paths produced a NaN (see run.json)\n", r.stats.nan_events);
     return 0;

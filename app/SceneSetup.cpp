@@ -23,8 +23,13 @@ std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageRe
         status = 2;
         return std::nullopt;
     }
+    print_scene_warnings(out.scene);
     try {
         out.solid = build_solid(out.scene, &report, surfaces_only);
+    } catch (const SceneError& e) {
+        std::cerr << e.what() << "\n";
+        status = 2;
+        return std::nullopt;
     } catch (const std::invalid_argument& e) {
         std::cerr << fmt::format("{}: {}\n", out.scene.source, e.what());
         status = 2;
@@ -35,6 +40,10 @@ std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageRe
         return std::nullopt;
     }
     return out;
+}
+
+void print_scene_warnings(const Scene& scene) {
+    for (const std::string& w : scene.warnings) std::cerr << w << "\n";
 }
 
 std::string verbose_stages(const StageReport& report) {

@@ -18,10 +18,15 @@ struct LoadedScene {
     Solid solid;
 };
 
-// On bad input prints the message to stderr, sets `status` to 2 and returns nothing.
+// On bad input prints the message to stderr, sets `status` to 2 and returns nothing; the solid is
+// built only for a scene that loads, after its warnings are printed (print_scene_warnings).
 // `surfaces_only`: no mesh unless a defect cuts the glass (for the analytic representation).
 std::optional<LoadedScene> load_scene_and_solid(const std::string& path, StageReport& report, int& status,
                                                 bool surfaces_only = false);
+
+// The scene's warnings (Scene::warnings: a view of the object that is likely a unit slip), one line
+// each on stderr.
+void print_scene_warnings(const Scene& scene);
 
 // The one parser of --representation, for every command that takes it:
 //   auto       analytic when the tracer supports the solid analytically (no defect cuts the

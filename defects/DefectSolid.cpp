@@ -116,6 +116,24 @@ double ellipsoid_clearance(const Lens& lens, const Vec3& c, const Mat3& F, const
 
 namespace {
 
+// Whether the ellipsoid certainly reaches into the glass: its centre is in it; for a sphere, the
+// centre is nearer to the glass than the radius (exact); for an ellipsoid, one of 1024 points
+// spread over its surface (a spherical Fibonacci lattice under its affine map) is in the glass.
+// False means "not shown", never "certainly not": only an ellipsoid centred outside the glass that
+// grazes it by less than the points' spacing is missed.
+bool reaches_glass(const Lens& lens, const Defect& d, double sdf) {
+    if (sdf > 0) return true;
+    if (d.is_sphere()) return sdf > -d.semi_axes.x;
+    const int n = 1024;
+    const double golden_angle = kPi * (3.0 - std::sqrt(5.0));
+    for (int i = 0; i < n; ++i) {
+        const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = golden_angle * i;
+        const Vec3 body{d.semi_axes.x * r * std::cos(phi), d.semi_axes.y * r * std::sin(phi), d.semi_axes.z * z};
+        if (lens.contains(d.center + d.frame * body)) return true;
+    }
+    return false;
+}
+
 void check_ellipsoid(const Lens& lens, const Defect& d, std::vector<DefectProblem>& out) {
     const char* size_key = d.is_sphere() ? "radius" : "semi_axes";
     const char* what = d.type == DefectType::Particle ? "particle" : "bubble";
@@ -133,9 +151,24 @@ void check_ellipsoid(const Lens& lens, const Defect& d, std::vector<DefectProble
     const double gap = ellipsoid_clearance(lens, d.center, d.frame, d.semi_axes);
     const double sdf = lens.signed_distance(d.center);
     const std::string where = fmt::format("({:g}, {:g}, {:g})", d.center.x, d.center.y, d.center.z);
+    // The ball of radius e_min about the centre lies in the ellipsoid, which lies in the ball of
+    // radius e_max: with the object's farthest point from the centre (exact), a void certainly
+    // holds the whole object (it would leave no glass) when that point is within e_min, and
+    // certainly does not when it is beyond e_max. For a sphere the two agree: the test is exact.
+    const double farthest = lens.farthest_distance(d.center);
+    const double e_min = std::min({d.semi_axes.x, d.semi_axes.y, d.semi_axes.z}), e_max = d.max_semi_axis();
+    if (farthest <= e_min) {
+        const std::string size = d.is_sphere() ? fmt::format("radius {:g} mm", d.semi_axes.x)
+                                               : fmt::format("semi-axes [{:g}, {:g}, {:g}] mm", d.semi_axes.x,
+                                                             d.semi_axes.y, d.semi_axes.z);
+        out.push_back({size_key, fmt::format("the {} at {} ({}) holds the whole object, whose every point lies within "
+                                             "{:.6g} mm of its centre: it would leave no glass (lengths are in mm)",
+                                             what, where, size, farthest)});
+        return;
+    }
     // For a sphere the test is exact; for an ellipsoid, a centre farther outside than its largest
     // semi-axis certainly misses the glass.
-    const bool misses = d.is_sphere() ? sdf <= -d.semi_axes.x : sdf <= -d.max_semi_axis();
+    const bool misses = d.is_sphere() ? sdf <= -d.semi_axes.x : sdf <= -e_max;
     if (d.type == DefectType::Bubble && d.surface_breaking) {
         if (gap > 0)
             out.push_back({"surface_breaking",
@@ -153,8 +186,14 @@ void check_ellipsoid(const Lens& lens, const Defect& d, std::vector<DefectProble
             misses ? fmt::format("the {} at {} lies entirely outside the glass", what, where)
                    : fmt::format("the {} at {} is not inside the glass: it reaches {:.6g} mm beyond the {} face",
                                  what, where, -gap, nearest_face(lens, d.center));
-        if (d.type == DefectType::Bubble) msg += "; declare surface_breaking: true for an open pit";
-        else msg += "; an absorbing particle must lie strictly inside the glass";
+        // As a pit it would be right only where it certainly crosses the boundary (it reaches into
+        // the glass, and not wholly: gap <= 0) and certainly leaves glass.
+        if (d.type == DefectType::Particle)
+            msg += "; an absorbing particle must lie strictly inside the glass";
+        else if (misses)
+            msg += "; an enclosed bubble must lie strictly inside it";
+        else if (farthest > e_max && reaches_glass(lens, d, sdf))
+            msg += "; declare surface_breaking: true for an open pit";
         out.push_back({"center", msg});
     }
 }

@@ -4,6 +4,7 @@
 #include <optional>
 #include <fmt/format.h>
 #include <stdexcept>
+#include <utility>
 
 #include "defects/DefectSolid.h"
 #include "defects/Inclusion.h"
@@ -12,6 +13,22 @@
 #include "geometry/Tessellate.h"
 
 namespace ltm {
+
+namespace {
+
+std::string defect_key_path(int defect, const std::string& key) {
+    return fmt::format("defects[{}]{}{}", defect, key.empty() ? "" : ".", key);
+}
+
+}  // namespace
+
+DefectError::DefectError(int defect_, std::string key_, std::string message_)
+    : std::invalid_argument(defect_key_path(defect_, key_) + ": " + message_),
+      defect(defect_),
+      key(std::move(key_)),
+      message(std::move(message_)) {}
+
+std::string DefectError::key_path() const { return defect_key_path(defect, key); }
 
 SurfaceTable object_surfaces(const Lens& lens) {
     SurfaceTable t;
@@ -281,10 +298,11 @@ static Solid build_surface_solid(const Lens& lens, const std::vector<Defect>& de
             continue;  // no faces: the region is TetGen's (build_solid)
         } else if (defects[k].type == DefectType::Particle || defects[k].type == DefectType::Inhomogeneity) {
             if (!clear)
-                throw std::invalid_argument(fmt::format(
-                    "defects[{}]: the {} touches another defect or lies within the tessellation's chord "
-                    "error of the glass boundary (clearance {:.3g} mm); it must be separate from everything",
-                    k, to_string(defects[k].type), tools[k].clearance));
+                throw DefectError(static_cast<int>(k), "center",
+                                  fmt::format("the {} touches another defect or lies within the tessellation's chord "
+                                              "error of the glass boundary (clearance {:.3g} mm); it must be separate "
+                                              "from everything",
+                                              to_string(defects[k].type), tools[k].clearance));
             appended.append(tools[k].tool, /*flip=*/false);
         } else if (clear && !opt.always_boolean) {
             appended.append(tools[k].tool, /*flip=*/true);
@@ -321,6 +339,25 @@ static Solid build_surface_solid(const Lens& lens, const std::vector<Defect>& de
         s.boolean_operations = static_cast<int>(groups.size());
         t_bool.done(fmt::format("{} defects in {} corefinement(s), {} -> {} triangles", cutters.size(), groups.size(),
                                 before, body.num_triangles()));
+        // Glass that is left has a boundary, and not only of cavity walls (those face into the
+        // voids, so some face of the object bounds it): no triangle left means no glass.
+        if (body.num_triangles() == 0) {
+            auto kind = [&](size_t k) {
+                return defects[k].surface_breaking ? "pit" : to_string(defects[k].type);
+            };
+            std::string names;
+            for (size_t i = 0; i < cutters.size(); ++i)
+                names += fmt::format("{}defects[{}] ({})", i == 0 ? "" : (i + 1 == cutters.size() ? " and " : ", "),
+                                     cutters[i], kind(cutters[i]));
+            throw DefectError(static_cast<int>(cutters.front()), "",
+                              cutters.size() == 1
+                                  ? fmt::format("the Boolean with this {} leaves no glass: it removes the whole object "
+                                                "(lengths are in mm)",
+                                                kind(cutters.front()))
+                                  : fmt::format("the Booleans with {} leave no glass: together they remove the whole "
+                                                "object (lengths are in mm)",
+                                                names));
+        }
     }
     body.append(appended);
     s.mesh = std::move(body);

@@ -1,6 +1,8 @@
 #pragma once
 // Builds the object solid with its defects: the tagged triangle mesh and the surface table that
 // every later stage uses. Stages and their times go into a StageReport.
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "defects/Defect.h"
@@ -38,6 +40,19 @@ struct Solid {
     std::vector<int> region_defect;
 };
 
+// A defect that makes the solid impossible in a way that only building it shows: a particle within
+// the tessellation's reach of the boundary or of another defect, or Booleans that leave no glass.
+// `defect` is the index of the defect to blame (the first of several that act together), `key` a
+// key of its mapping ("center", "radius"; "" for the defect as a whole), as DefectProblem's.
+// what() is "defects[<defect>].<key>: <message>"; scene/SceneSolid.h locates it in the scene file.
+struct DefectError : std::invalid_argument {
+    DefectError(int defect, std::string key, std::string message);
+    // "defects[<defect>]" or "defects[<defect>].<key>".
+    std::string key_path() const;
+    int defect = 0;
+    std::string key, message;
+};
+
 // Tags 0, 1, 2 are always the front, back and rim.
 constexpr int kTagFront = 0, kTagBack = 1, kTagRim = 2;
 
@@ -58,6 +73,12 @@ SurfaceTable object_surfaces(const Lens& lens);
 // particle and inclusion strictly inside the glass and apart from the others) gets its surface
 // table without any mesh: the analytic representation traces closed forms only (Tracer.h), and
 // tessellating would be work nobody uses. A scene with a cut gets the full mesh regardless.
+//
+// Throws DefectError when the Booleans leave no glass (defect_problems rejects a single void that
+// holds the whole object before any Boolean runs; this is the guard for what it cannot decide:
+// several voids that remove the object together, an ellipsoid that holds it more tightly than
+// its inscribed ball shows), and for a particle or uniform inhomogeneity that is not clear of
+// everything.
 Solid build_solid(const Lens& lens, const std::vector<Defect>& defects, const MeshOptions& options,
                   StageReport* report = nullptr, const IndexField& field = IndexField{}, bool surfaces_only = false);
 

@@ -1,5 +1,6 @@
 #include "geometry/Lens.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <stdexcept>
@@ -155,6 +156,37 @@ double Lens::distance_to_rim(const Vec3& p) const {
     const double z0 = z_front(a), z1 = z_back(a);
     if (p.z >= z0 && p.z <= z1) return std::fabs(rho - a);
     return std::hypot(rho - a, p.z < z0 ? p.z - z0 : p.z - z1);
+}
+
+// The farthest point of a cap (with its edge circle) from p. On the sphere |q - p|^2 =
+// R^2 + |c - p|^2 + 2 (q - c) . (c - p) is affine in q, so its only local maximum on the sphere is
+// the antipode of p's direction, q = c - (p - c) |R| / |p - c|: if that lies on the cap, it is the
+// cap's farthest point (|p - c| + |R| away); else the maximum over the cap is on its boundary, the
+// edge circle (rho = a, z = z_edge), whose farthest point from p is the one diametrically opposite
+// p's azimuth, hypot(rho_p + a, z_p - z_edge) away. A flat cap (a disc) is a convex domain of the
+// convex |q - p|^2, which takes its maximum on the boundary: the edge circle again.
+double Lens::farthest_on_cap(const Vec3& p, double R, double z_vertex, double z_edge) const {
+    const double a = aperture_radius();
+    const double to_edge = std::hypot(std::hypot(p.x, p.y) + a, p.z - z_edge);
+    if (std::isinf(R)) return to_edge;
+    const Vec3 c{0, 0, z_vertex + R};
+    const Vec3 d = p - c;
+    const double l = length(d);
+    if (l > 0) {
+        const Vec3 q = c - d * (std::fabs(R) / l);
+        const bool same_branch = (q.z - c.z) * (z_vertex - c.z) > 0;
+        if (same_branch && std::hypot(q.x, q.y) <= a) return std::max(to_edge, l + std::fabs(R));
+    }
+    return to_edge;
+}
+
+// The solid's boundary is the two caps and the rim; over the rim (rho = a, z between the edge
+// circles) the distance's horizontal part is largest opposite p's azimuth whatever z, and its
+// vertical part, convex in z, is largest at an end: on an edge circle, which the caps include.
+double Lens::farthest_distance(const Vec3& p) const {
+    const double a = aperture_radius();
+    return std::max(farthest_on_cap(p, spec_.r1, -0.5 * spec_.center_thickness, z_front(a)),
+                    farthest_on_cap(p, spec_.r2, 0.5 * spec_.center_thickness, z_back(a)));
 }
 
 double Lens::signed_distance(const Vec3& p) const {

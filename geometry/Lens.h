@@ -82,6 +82,9 @@ public:
     double distance_to_front(const Vec3& p) const;
     double distance_to_back(const Vec3& p) const;
     double distance_to_rim(const Vec3& p) const;
+    // The largest distance from p to any point of the solid, exact: the ball of that radius about
+    // p is the smallest one centred there that holds the whole object.
+    double farthest_distance(const Vec3& p) const;
 
     // The point of the front (side = 0) or back (side = 1) surface above (x, y).
     Vec3 surface_point(int side, double x, double y) const;
@@ -90,6 +93,7 @@ public:
 
 private:
     double distance_to_cap(const Vec3& p, double R, double z_vertex, double z_edge) const;
+    double farthest_on_cap(const Vec3& p, double R, double z_vertex, double z_edge) const;
     LensSpec spec_;
 };
 

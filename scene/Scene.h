@@ -3,6 +3,7 @@
 // the telecentric camera, the programmable display, meshing options and the seed.
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,11 @@ struct TracingDesc {
     int split_depth = kDefaultSplitDepth;  // used by Split only
 };
 
+// Where a value sits in a scene's file: 1-based line and column, as an editor shows them.
+struct SourceLocation {
+    int line = 0, column = 0;
+};
+
 struct Scene {
     std::string source;                        // the file it was read from
     ObjectDesc object;
@@ -68,6 +74,17 @@ struct Scene {
     MeshOptions mesh;
     TracingDesc tracing;
     std::uint64_t seed = 1;
+
+    // Where the file gave each value, by key path from the scene's root ("object.diameter",
+    // "camera.size", "defects[2]" for a defect's mapping, "defects[2].radius"), and the scene's
+    // own key path in its document ("scene" for a dataset spec's inline scene, else ""): problems
+    // found after loading are located as the loader's own (scene_error, scene/SceneLoader.h).
+    // Empty for a scene made in memory.
+    std::map<std::string, SourceLocation> locations;
+    std::string key_prefix;
+    // What the loader found odd but possible (docs/scene-format.md, "Warnings"): one line each,
+    // "FILE:LINE:COLUMN: warning: KEY: message". The commands print them to stderr.
+    std::vector<std::string> warnings;
 };
 
 }  // namespace ltm

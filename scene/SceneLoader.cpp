@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "defects/DefectSolid.h"
+#include "scene/CameraView.h"
 #include "scene/StrictYaml.h"
 
 namespace ltm {
@@ -39,6 +40,19 @@ public:
     Scene run(const YAML::Node& root, bool whole_file) const;
 
 private:
+    // Reader::walk, keeping where each entry's value is (Scene::locations).
+    void walk(const YAML::Node& map, const std::string& path, const KeyRule& rule,
+              const std::function<void(const Item&)>& visit) const {
+        Reader::walk(map, path, rule, [&](const Item& e) {
+            const Loc at = e.value_loc();
+            locations_[join_path(path, e.key)] = {at.line, at.column};
+            visit(e);
+        });
+    }
+    // "FILE:LINE:COLUMN: warning: KEY: message" at the key's value (Scene::warnings).
+    std::string warning(const std::string& key, const std::string& message) const;
+    mutable std::map<std::string, SourceLocation> locations_;
+
     // [x, y] or [x, y, z] (a point of a face; `has_z` says whether z was given).
     Vec3 point23(const Item& it, const std::string& path, bool& has_z) const;
 
@@ -539,6 +553,13 @@ void SceneParser::parse_tracing(const Item& it, TracingDesc& tracing) const {
              "applies only to 'estimator: split' (the estimator here is sample); remove it or add 'estimator: split'");
 }
 
+std::string SceneParser::warning(const std::string& key, const std::string& message) const {
+    const std::string k = yaml::enclosing_key(key, [&](const std::string& x) { return locations_.count(x) > 0; });
+    const std::string where =
+        k.empty() ? file() : fmt::format("{}:{}:{}", file(), locations_.at(k).line, locations_.at(k).column);
+    return fmt::format("{}: warning: {}: {}", where, join_path(prefix(), key), message);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The document
 
@@ -591,6 +612,8 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
                 const YAML::Node node = e.value[i];
                 const std::string path = fmt::format("defects[{}]", i);
                 Where where;
+                const Loc node_loc = loc_of(node);
+                locations_[path] = {node_loc.line, node_loc.column};
                 scene.defects.push_back(parse_defect(node, path, where));
                 pending.push_back({i, std::move(where), loc_of(node)});
                 if (have_object) check_pending();
@@ -611,6 +634,10 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     });
     if (!have_object) fail(loc_of(root), "object", "missing required key 'object'");
     if (!have_display) check_display(scene.object, scene.display, loc_of(root), false);
+    for (const ViewWarning& w : view_warnings(scene.object, scene.camera, locations_.count("camera.size") > 0))
+        scene.warnings.push_back(warning(w.key, w.message));
+    scene.locations = std::move(locations_);
+    scene.key_prefix = prefix();
     return scene;
 }
 
@@ -626,5 +653,16 @@ Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for
 }
 
 Scene load_scene(const std::string& path) { return parse_scene(yaml::read_file(path, "scene file"), path); }
+
+InputError scene_error(const Scene& scene, const std::string& key, const std::string& message) {
+    const std::string path = join_path(scene.key_prefix, key);
+    // The value of the key, or of its nearest enclosing key in the file ("defects[2].radius" ->
+    // "defects[2]"), as the loader's own errors are located.
+    const std::string k =
+        yaml::enclosing_key(key, [&](const std::string& x) { return scene.locations.count(x) > 0; });
+    if (k.empty()) return InputError(scene.source, 0, 0, path, path.empty() ? message : path + ": " + message);
+    const SourceLocation at = scene.locations.at(k);
+    return InputError(scene.source, at.line, at.column, path, message);
+}
 
 }  // namespace ltm

@@ -46,4 +46,11 @@ Scene parse_scene(const std::string& yaml_text, const std::string& file_name_for
 // Throws SceneError on any bad input.
 Scene parse_scene_node(const YAML::Node& root, const std::string& file, const std::string& prefix = "");
 
+// A problem with the scene found after loading (building its solid), located as the loader
+// locates its own: at the value of `key` (a key path from the scene's root, "defects[2].radius"),
+// or of its nearest enclosing key the file gives ("defects[2]": the defect's mapping), with the
+// key path behind the scene's prefix. A scene made in memory has no locations: then
+// "<source>: <key path>: <message>".
+InputError scene_error(const Scene& scene, const std::string& key, const std::string& message);
+
 }  // namespace ltm

@@ -41,15 +41,19 @@ const Item* find_item(const std::vector<Item>& items, const std::string& key) {
     return nullptr;
 }
 
-Loc located(const Where& where, const std::string& key, Loc fallback) {
+std::string enclosing_key(const std::string& key, const std::function<bool(const std::string&)>& known) {
     for (std::string k = key; !k.empty();) {
-        const auto w = where.find(k);
-        if (w != where.end()) return w->second;
+        if (known(k)) return k;
         const auto cut = k.find_last_of(".[");
         if (cut == std::string::npos) break;
         k = k.substr(0, cut);
     }
-    return fallback;
+    return "";
+}
+
+Loc located(const Where& where, const std::string& key, Loc fallback) {
+    const std::string k = enclosing_key(key, [&](const std::string& x) { return where.count(x) > 0; });
+    return k.empty() ? fallback : where.at(k);
 }
 
 std::string join_path(const std::string& parent, const std::string& key) {

@@ -70,8 +70,10 @@ const Item* find_item(const std::vector<Item>& items, const std::string& key);
 // nested mappings may be entered as "arc.radius", "index_field.g".
 using Where = std::map<std::string, Loc>;
 
-// The location of `key` in `where`, or of its nearest enclosing key that is there
-// ("center[2]" -> "center", "arc.radius" -> "arc"), else `fallback`.
+// `key`, or its nearest enclosing key ("center[2]" -> "center", "arc.radius" -> "arc"), for which
+// `known` holds; "" when none does.
+std::string enclosing_key(const std::string& key, const std::function<bool(const std::string&)>& known);
+// The location of `key` in `where`, or of its nearest enclosing key that is there, else `fallback`.
 Loc located(const Where& where, const std::string& key, Loc fallback);
 
 // "camera" + "size" -> "camera.size"; "size" + "[1]" -> "size[1]"; "" + "seed" -> "seed";

@@ -823,3 +823,13 @@ constexpr double kFieldDifferenceRelative = 1e-5;
 constexpr double kFieldIdentityRelative = 1e-12;
 
 }  // namespace ltm::tol
+
+namespace ltm::tol {
+
+// Lens::farthest_distance against a closed form or a sampled distance (tests/geometry_lens.cpp):
+// the antipode c - (p - c) |R| / |p - c| and its distance to p, or an edge circle's hypot, take at
+// most 8 roundings, each relative to the magnitudes involved (<= M, the distance itself or the
+// operands |p|, |R|): within 8 u M; 16 u M leaves a factor 2.
+inline double farthest_point(double magnitude) { return 16.0 * (kEps / 2) * magnitude; }
+
+}  // namespace ltm::tol

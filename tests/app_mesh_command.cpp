@@ -116,6 +116,45 @@ TEST_F(MeshCommand, ImpossibleGeometryExitsTwo) {
     EXPECT_TRUE(outputs().empty());
 }
 
+// The pit: the default lens with a 200 mm surface-breaking bubble at its centre, which
+// holds the whole lens (every point of it lies within 12.58 mm of the centre). Refused at its
+// radius before any Boolean runs, exit 2, nothing written.
+TEST_F(MeshCommand, PitThatHoldsTheObjectExitsTwoBeforeAnyBoolean) {
+    const fs::path pit = write("pit.yaml",
+                               "object: {type: lens, r1: 50, r2: -50, center_thickness: 6, diameter: 25, ior: 1.5168}\n"
+                               "defects:\n"
+                               "  - {type: bubble, center: [0, 0, 0], radius: 200, surface_breaking: true}\n");
+    const Outcome r = ltmsim("mesh " + pit.string() + " -o " + (dir / "m.ply").string() + " --verbose", dir);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(r.err.rfind(pit.string() + ":3:47: defects[0].radius: the bubble at (0, 0, 0) (radius 200 mm) holds the "
+                                         "whole object, whose every point lies within 12.5795 mm of its centre: it "
+                                         "would leave no glass",
+                          0),
+              0u)
+        << r.err;
+    EXPECT_EQ(r.err.find("boolean"), std::string::npos) << r.err;  // refused by the loader
+    EXPECT_TRUE(outputs().empty());
+}
+
+// The final guard: two pits that each leave glass but together remove the whole object (a 2 mm
+// window, |z| <= 0.25, and two pits of radius 2 centred on its front face at x = -+1.5: every
+// point of the window is within hypot(1.5, 1, 0.5) = 1.87 mm of one of them, while the far rim is
+// hypot(2.5, 0.5) = 2.55 mm from each). The Booleans run and leave no triangle: exit 2, located
+// at the first pit's mapping, nothing written.
+TEST_F(MeshCommand, BooleansThatLeaveNoGlassExitTwo) {
+    const fs::path pits = write("pits.yaml",
+                                "object: {type: window, thickness: 0.5, diameter: 2, ior: 1.5168}\n"
+                                "defects:\n"
+                                "  - {type: bubble, center: [-1.5, 0, -0.25], radius: 2, surface_breaking: true}\n"
+                                "  - {type: bubble, center: [1.5, 0, -0.25], radius: 2, surface_breaking: true}\n"
+                                "mesh: {chord_tolerance: 0.01}\n");
+    const Outcome r = ltmsim("mesh " + pits.string() + " -o " + (dir / "m.ply").string(), dir);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_EQ(r.err, pits.string() + ":3:5: defects[0]: the Booleans with defects[0] (pit) and defects[1] (pit) leave "
+                                     "no glass: together they remove the whole object (lengths are in mm)\n");
+    EXPECT_TRUE(outputs().empty());
+}
+
 TEST_F(MeshCommand, BadOutputPathsExitTwo) {
     Outcome r = ltmsim("mesh " + scene("default.yaml") + " -o " + (dir / "missing" / "m.ply").string(), dir);
     EXPECT_EQ(r.status, 2);

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -325,6 +326,62 @@ TEST_F(RenderCommand, ExistingOutputsAreKeptUnlessOverwrite) {
     EXPECT_EQ(forced.status, 0) << forced.err;
     EXPECT_TRUE(slurp(out / "ltm.npz") == npz);  // same scene and seed: the same matrix, the same bytes
     expect_outputs(out, {"ltm.npz", "run.json"});
+}
+
+// A successful render says on stdout, in one line, what it wrote where and how fast it traced:
+// here T of 20 x 20 camera pixels by 40 x 40 display pixels, 20 x 20 x 16 = 6400 camera paths.
+TEST_F(RenderCommand, OneSummaryLineOnSuccess) {
+    const fs::path out = dir / "out";
+    const Outcome r = ltmsim(render(scene, out, "--threads 2"), dir);
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_EQ(r.lines().size(), 1u) << r.out;
+    const std::string line = r.lines()[0];
+    EXPECT_EQ(line.rfind("ltmsim render: wrote " + out.string() + "/: ltm.npz (T 400 x 1600, ", 0), 0u) << line;
+    EXPECT_NE(line.find(" nonzeros), features.exr and features.npz ("), std::string::npos) << line;
+    EXPECT_NE(line.find(" images, previews in features/), reference.exr, run.json; 6400 paths in "), std::string::npos)
+        << line;
+    EXPECT_EQ(line.substr(line.size() - 9), " Mpaths/s") << line;
+    // A pattern's render names its image.
+    const fs::path png = dir / "white.png";
+    write_gray_png(png, kQ, kP, std::vector<std::uint8_t>(static_cast<std::size_t>(kP * kQ), 255));
+    const Outcome p = ltmsim(render(scene, dir / "img", "--threads 2 --no-previews --pattern '" + png.string() + "'"), dir);
+    ASSERT_EQ(p.status, 0) << p.err;
+    ASSERT_EQ(p.lines().size(), 1u) << p.out;
+    EXPECT_EQ(p.lines()[0].rfind("ltmsim render: wrote " + (dir / "img").string() +
+                                     "/: image.exr and image.npz (20 x 20 image of " + png.string() +
+                                     "), run.json; 6400 paths in ",
+                                 0),
+              0u)
+        << p.lines()[0];
+}
+
+// The first case: the lens in metres (diameter 0.025 mm) under 1.3 mm pixels renders a
+// flat image; the render goes on, and says so on stderr in one line naming the sizes and the unit.
+TEST_F(RenderCommand, ObjectSmallerThanAPixelWarns) {
+    const fs::path metres =
+        write("metres.yaml",
+              "object: {type: lens, r1: 0.05, r2: -0.05, center_thickness: 0.006, diameter: 0.025, ior: 1.5168}\n"
+              "camera: {resolution: [20, 20], size: [26.0, 26.0], numerical_aperture: 0.05, samples_per_pixel: 16}\n"
+              "display: {resolution: [40, 40], size: [80.0, 80.0], z: 60.0}\n");
+    const Outcome r = ltmsim(render(metres, dir / "out", "--threads 2 --no-previews"), dir);
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, metres.string() + ":1:78: warning: object.diameter: the object (diameter 0.025 mm) is smaller "
+                                       "than one camera pixel (1.3 x 1.3 mm: camera.size over camera.resolution), "
+                                       "0.00029 of its area; lengths are in mm: were the object's given in metres?\n");
+    EXPECT_TRUE(fs::exists(dir / "out" / "ltm.npz"));
+}
+
+// A field of 26 um for the 25 mm lens (camera.size in metres) sees 4 (0.013 / 12.5)^2 / pi =
+// 1.38e-6 of it: a warning at camera.size, and the render goes on.
+TEST_F(RenderCommand, FieldThatSeesASliverWarns) {
+    const std::string yaml = scene_yaml(3);
+    const fs::path sliver = write("sliver.yaml", std::regex_replace(yaml, std::regex("size: \\[26.0, 26.0\\]"),
+                                                                     "size: [0.026, 0.026]"));
+    const Outcome r = ltmsim(render(sliver, dir / "out", "--threads 2 --no-previews"), dir);
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err, sliver.string() + ":5:38: warning: camera.size: the camera's field (0.026 x 0.026 mm, centred on "
+                                       "the axis) sees 1.38e-06 of the object's extent (diameter 25 mm); lengths are in "
+                                       "mm: was camera.size given in metres?\n");
 }
 
 namespace {

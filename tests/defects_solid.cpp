@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <set>
 
 #include "defects/DefectSolid.h"
@@ -427,6 +428,81 @@ TEST(Placement, ProblemsAreReported) {
     EXPECT_EQ(key(e), "none");
     e.semi_axes = {0.1, 0.1, 3.1};
     EXPECT_EQ(key(e), "center");
+}
+
+// A void that holds the whole object is refused at its size before any Boolean runs; the advice
+// to declare a bubble surface-breaking comes only where the pit would cross the boundary and
+// leave glass. The paper's lens is farthest from its centre on the front and back edge circles:
+// a = 12.5, z = +-(3 - sag(50, 12.5)) = +-(3 - (50 - sqrt(2500 - 156.25))) = +-1.412297..., at
+// hypot(12.5, 1.412297) = 12.579531 mm.
+TEST(Placement, VoidsThatLeaveNoGlassAndTheSurfaceBreakingAdvice) {
+    const Lens lens(kPaper);
+    auto first = [&](const Defect& d) {
+        const auto p = defect_problems(lens, d);
+        return p.empty() ? DefectProblem{"none", ""} : p[0];
+    };
+    const double farthest = std::hypot(12.5, 3.0 - (50.0 - std::sqrt(2500.0 - 156.25)));
+    for (bool breaking : {true, false}) {
+        SCOPED_TRACE(breaking ? "pit" : "bubble");
+        const DefectProblem huge = first(bubble({0, 0, 0}, 200, breaking));  // the issue's: 5 s of Boolean, no glass
+        EXPECT_EQ(huge.key, "radius");
+        EXPECT_NE(huge.message.find("holds the whole object"), std::string::npos) << huge.message;
+        EXPECT_NE(huge.message.find(fmt::format("{:.6g} mm", farthest)), std::string::npos) << huge.message;
+        EXPECT_EQ(huge.message.find("surface_breaking"), std::string::npos) << huge.message;
+        // Exact at the threshold: a hair larger holds the object, a hair smaller leaves glass at
+        // the edge circles.
+        EXPECT_EQ(first(bubble({0, 0, 0}, farthest * (1 + 1e-9), breaking)).key, "radius");
+        EXPECT_EQ(first(bubble({0, 0, 0}, farthest * (1 - 1e-9), breaking)).key, breaking ? "none" : "center");
+    }
+    const std::string advice = "declare surface_breaking: true";
+    // Crossing the front face and leaving glass: the advice is right.
+    EXPECT_NE(first(bubble({0, 0, -3.05}, 0.1)).message.find(advice), std::string::npos);
+    // Entirely outside: a pit there would cut nothing (and is refused as such).
+    const DefectProblem outside = first(bubble({0, 0, 10}, 0.1));
+    EXPECT_EQ(outside.key, "center");
+    EXPECT_NE(outside.message.find("entirely outside"), std::string::npos) << outside.message;
+    EXPECT_EQ(outside.message.find("surface_breaking"), std::string::npos) << outside.message;
+    // Crossing, but as large as the object: this flat ellipsoid holds the whole lens
+    // ((12.5/200)^2 + (3/3.5)^2 < 1 at the farthest corners), which its inscribed ball (3.5 mm)
+    // cannot show; the pit might leave no glass, so no advice. The centred 0.1 x 0.1 x 3.1
+    // needle (through both vertices) would leave glass: advice.
+    Defect flat = bubble({0, 0, 0}, 1);
+    flat.semi_axes = {200, 200, 3.5};
+    EXPECT_EQ(first(flat).key, "center");
+    EXPECT_EQ(first(flat).message.find("surface_breaking"), std::string::npos) << first(flat).message;
+    Defect needle = bubble({0, 0, 0}, 1);
+    needle.semi_axes = {0.1, 0.1, 3.1};
+    EXPECT_NE(first(needle).message.find(advice), std::string::npos) << first(needle).message;
+    // An ellipsoid centred outside the glass that reaches into it: advice, from a point of it in
+    // the glass. Centre 0.3 mm in front of the front vertex, long axis 0.5 mm along z.
+    Defect reaching = bubble({0, 0, -3.3}, 1);
+    reaching.semi_axes = {0.05, 0.05, 0.5};
+    EXPECT_NE(first(reaching).message.find(advice), std::string::npos) << first(reaching).message;
+}
+
+// The final guard: Booleans that leave no glass are an error naming the defects, whatever
+// defect_problems could tell of each alone. A 2 mm window (|z| <= 0.25) and two pits of radius 2
+// centred on its front face at x = -+1.5: each is farther than 2 from the far rim (hypot(2.5,
+// 0.5) = 2.55), so neither holds the window, but every point of it is within hypot(1.5, 1, 0.5)
+// = 1.87 of one of them: together they remove it all.
+TEST(Solid, BooleansThatLeaveNoGlassAreAnError) {
+    const LensSpec window{INFINITY, INFINITY, 0.5, 2, 1.5168};
+    const std::vector<Defect> pits = {bubble({-1.5, 0, -0.25}, 2.0, true), bubble({1.5, 0, -0.25}, 2.0, true)};
+    const Lens lens(window);
+    for (const Defect& d : pits) EXPECT_TRUE(defect_problems(lens, d).empty());
+    MeshOptions coarse;
+    coarse.chord_tolerance = 0.01;
+    try {
+        build_solid(lens, pits, coarse);
+        ADD_FAILURE() << "no DefectError";
+    } catch (const DefectError& e) {
+        EXPECT_EQ(e.defect, 0);
+        EXPECT_EQ(e.key, "");
+        EXPECT_EQ(std::string(e.what()), "defects[0]: " + e.message);
+        EXPECT_NE(e.message.find("defects[0] (pit) and defects[1] (pit) leave no glass"), std::string::npos) << e.what();
+    }
+    // One of them alone leaves glass: no error.
+    EXPECT_GT(build_solid(lens, {pits[0]}, coarse).mesh.num_triangles(), 0u);
 }
 
 namespace {

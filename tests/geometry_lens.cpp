@@ -117,6 +117,55 @@ TEST(Lens, PatchDistancesAreExact) {
     EXPECT_NEAR(lens.distance_to_front({15.5, 0, ze - 4}), 5.0, tol::cap_edge_distance(std::fabs(ze) + 4.0 + 5.0));
 }
 
+// The farthest point of the solid from p (Lens::farthest_distance) against independent references.
+// Closed forms: a ball of radius R is |p| + R from p at its farthest (the antipode); a window, the
+// cylinder rho <= a, |z| <= t/2, is hypot(rho + a, |z| + t/2) (the rim's far edge on the far face).
+// Every kind: the largest distance to a sampling of the boundary (the caps over a polar grid, the
+// rim over z and azimuth) is a lower bound, at most the sampling's covering radius h below the
+// exact value (distance is 1-Lipschitz). The points are chosen so that a wrong branch (a cap's
+// edge instead of its interior antipode, or the reverse) is off by far more than h.
+TEST(Lens, FarthestDistanceIsExact) {
+    const std::vector<Vec3> points = {{0, 0, 0},    {0, 0, -200},   {0, 0, 200},  {30, 5, -4},  {-3, 2, 60},
+                                      {100, -50, 0}, {5, 5, -47},   {1, -2, 47},  {0.5, 0, -3}, {12.5, 0, 1}};
+    const double R = 12.5;
+    const Lens ball(ball_spec(R, 1.5));
+    for (const Vec3& p : points)
+        EXPECT_NEAR(ball.farthest_distance(p), length(p) + R, tol::farthest_point(length(p) + R)) << p.x << " " << p.y << " " << p.z;
+    const Lens window({INFINITY, INFINITY, 3, 25, 1.5});
+    for (const Vec3& p : points) {
+        const double expected = std::hypot(std::hypot(p.x, p.y) + 12.5, std::fabs(p.z) + 1.5);
+        EXPECT_NEAR(window.farthest_distance(p), expected, tol::farthest_point(expected)) << p.x << " " << p.y << " " << p.z;
+    }
+    const int n_rho = 100, n_phi = 720, n_z = 50;
+    for (const Kind& k : lens_kinds()) {
+        const Lens lens(k.spec);
+        const double a = lens.aperture_radius();
+        // Neighbouring samples of a cap are at most dr |R| / sqrt(R^2 - a^2) apart along a meridian
+        // (the arc over a radial step, steepest at the rim) and a dphi apart along a parallel, the
+        // rim's dz and a dphi: half the diagonal of the coarser cell bounds the covering radius.
+        const double dr = a / n_rho, dphi = 2 * kPi / n_phi;
+        double h = 0.5 * std::hypot(lens.edge_thickness() / n_z, a * dphi);
+        for (double Rf : {k.spec.r1, k.spec.r2})
+            h = std::max(h, 0.5 * std::hypot(std::isinf(Rf) ? dr : dr * std::fabs(Rf) / std::sqrt(Rf * Rf - a * a), a * dphi));
+        for (const Vec3& p : points) {
+            double sampled = 0;
+            for (int j = 0; j < n_phi; ++j) {
+                const double c = std::cos(j * dphi), s = std::sin(j * dphi);
+                for (int side = 0; side < 2; ++side)
+                    for (int i = 0; i <= n_rho; ++i)
+                        sampled = std::max(sampled, distance(p, lens.surface_point(side, i * dr * c, i * dr * s)));
+                for (int i = 0; i <= n_z; ++i) {
+                    const double z = lens.z_front(a) + lens.edge_thickness() * i / n_z;
+                    sampled = std::max(sampled, distance(p, Vec3{a * c, a * s, z}));
+                }
+            }
+            const double exact = lens.farthest_distance(p);
+            EXPECT_GE(exact, sampled - tol::farthest_point(sampled)) << k.name << " " << p.x << " " << p.y << " " << p.z;
+            EXPECT_LE(exact, sampled + h) << k.name << " " << p.x << " " << p.y << " " << p.z;
+        }
+    }
+}
+
 class LensTessellationTest : public ::testing::TestWithParam<std::tuple<int, double, double>> {};
 
 // For each kind, chord tolerance and scale: a closed, manifold, outward, self-intersection-free

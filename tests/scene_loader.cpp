@@ -367,6 +367,19 @@ TEST(SceneLoaderGeometry, BubbleOutsideTheGlassNotDeclaredSurfaceBreaking) {
                                            "  - {type: bubble, center: [0, 0, 10], radius: 0.1}\n");
     EXPECT_EQ(e.rfind("scene.yaml:10:28: defects[1].center: ", 0), 0u) << e;
     EXPECT_NE(e.find("outside the glass"), std::string::npos) << e;
+    // A pit there would cut nothing: no advice to declare one.
+    EXPECT_EQ(e.find("surface_breaking"), std::string::npos) << e;
+}
+
+// A void that holds the whole lens (its farthest point from the origin is on the edge circles,
+// hypot(12.5, 3 - sag(50, 12.5)) = 12.5795 mm away) is refused at its size, pit or not, and the
+// message advises no pit.
+TEST(SceneLoaderGeometry, VoidThatHoldsTheObject) {
+    for (const char* breaking : {", surface_breaking: true", ""})
+        EXPECT_EQ(error_of(kLens + "defects:\n  - {type: bubble, center: [0, 0, 0], radius: 200" + breaking + "}\n"),
+                  "scene.yaml:9:47: defects[0].radius: the bubble at (0, 0, 0) (radius 200 mm) holds the whole object, "
+                  "whose every point lies within 12.5795 mm of its centre: it would leave no glass (lengths are in mm)")
+            << breaking;
 }
 
 TEST(SceneLoaderGeometry, ScratchOffItsSurface) {

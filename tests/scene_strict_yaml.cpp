@@ -198,7 +198,7 @@ TEST(InlineScene, ErrorsAtTheirLinesInTheSpec) {
               "spec.yaml:1:87: scene.object.ior: the glass's refractive index must be > 1 (got 0.9)");
     EXPECT_EQ(error_of("scene: {object: " + kObject + ", defects: [{type: bubble, center: [0, 0, 9], radius: 0.1}]}\n"),
               "spec.yaml:1:129: scene.defects[0].center: the bubble at (0, 0, 9) lies entirely outside the glass; "
-              "declare surface_breaking: true for an open pit");
+              "an enclosed bubble must lie strictly inside it");
 }
 
 TEST(InlineScene, DocumentStartProblemsAtTheMapping) {

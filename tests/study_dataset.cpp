@@ -500,6 +500,28 @@ defects:
     EXPECT_NE(md.find("- defect-free samples: 1 (requested share 0.25: 1.0 expected)"), std::string::npos) << md;
 }
 
+TEST(Sampler, PitsThatWouldLeaveNoGlassMakeTheSpecInfeasible) {
+    // A pit of radius 200 centred on the front face of a 25 mm window holds all of it (every point
+    // of the window is within hypot(25, 3) = 25.2 mm of any point of that face): each draw is
+    // refused as the loader refuses it, and the spec is an error before anything is rendered.
+    const DatasetSpec s = parse_dataset_spec(R"(scene:
+  object: {type: window, thickness: 3.0, diameter: 25.0, ior: 1.5}
+samples: 3
+defects:
+  - {type: bubble, radius: 200.0, surface_breaking: true, surface: front}
+max_attempts: 100
+)",
+                                             "spec.yaml");
+    try {
+        draw_sample(s, 0);
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.line, 5);
+        EXPECT_EQ(e.key_path, "defects[0]");
+        EXPECT_NE(std::string(e.what()).find("(radius 200 mm) holds the whole object"), std::string::npos) << e.what();
+    }
+}
+
 // ---- COCO RLE ----
 
 TEST(CocoRle, CountsAndStringsFollowMaskApi) {
