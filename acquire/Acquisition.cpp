@@ -37,7 +37,7 @@ constexpr long kMaxCandidates = 16384;
 
 }  // namespace
 
-Measurements simulate(const CsrMatrix& T, const PatternBlock& X, const SensorModel& sensor, int first_pattern,
+Measurements simulate(const CsrMatrix& T, const PatternBlock& X, const SensorModel& sensor, std::uint64_t first_pattern,
                       int threads) {
     if (T.cols != X.pixels()) throw std::invalid_argument("simulate: the patterns do not cover T's display pixels");
     const int K = X.K;  // T itself is checked by the block product
@@ -66,7 +66,7 @@ Measurements simulate(const CsrMatrix& T, const PatternBlock& X, const SensorMod
                 double* out = &y.values[static_cast<std::size_t>(k) * K];
                 for (int j = 0; j < K; ++j) {
                     const double radiance_kj = X.binary ? b * row_sum + (1 - b) * out[j] : out[j];
-                    CounterRng rng(sensor.seed, static_cast<std::uint64_t>(first_pattern + j), static_cast<std::uint64_t>(k));
+                    CounterRng rng(sensor.seed, first_pattern + static_cast<std::uint64_t>(j), static_cast<std::uint64_t>(k));
                     out[j] = measure(sensor, radiance_kj, rng);
                 }
             }
@@ -124,11 +124,15 @@ std::string check_patterns(const AcquireOptions& o, int P, int Q) {
         case Method::Stripes: {
             const int w = stripe_width_for(K, P, Q);
             if (stripes_count(w, P, Q) == K) return "";
+            // The counts nearest K: the largest below (width w) and the smallest above (width
+            // w - 1 shows it), each with the width run_acquisition uses for that count,
+            // stripe_width_for's: the narrowest stripes that show it. Several widths show one
+            // count (166 down to 125 all give 8 patterns for 500 x 500), and 8 patterns mean 125.
             const int below = stripes_count(w, P, Q);
             const int above = w > 1 ? stripes_count(w - 1, P, Q) : below;
             return fmt::format("method stripes shows ceil(P / w) + ceil(Q / w) patterns for {} (w the stripe width): {} "
                                "is not such a count; the nearest are {} (w = {}) and {} (w = {})",
-                               display, K, below, w, above, w > 1 ? w - 1 : w);
+                               display, K, below, w, above, stripe_width_for(above, P, Q));
         }
         case Method::Compressive: {
             if (o.stripe_width < 1) return fmt::format("--stripe-width must be >= 1 (got {})", o.stripe_width);
@@ -423,11 +427,11 @@ AcquireResult run_acquisition(const CsrMatrix& T, int N, int M, const DisplayGri
     out.decode_seconds = decode;
     out.pattern_seconds = patterns;
     out.simulate_seconds = seconds_since(t0) - decode - patterns;
-    // The bright field beside every method: one more image through the same sensor, with its own
-    // streams (pattern index K).
+    // The bright field beside every method: one more image through the same sensor, with streams
+    // of its own that no method's patterns use, so it is the same image for every method and K.
     PatternBlock white = PatternBlock::make_binary(P, Q, 1);
     for (long l = 0; l < white.pixels(); ++l) white.set(l, 0);
-    const Measurements bf = simulate(T, white, sensor, o.patterns, o.threads);
+    const Measurements bf = simulate(T, white, sensor, kBrightFieldPattern, o.threads);
     out.bright.width = N;
     out.bright.height = M;
     out.bright.channels.emplace_back("BrightField", std::vector<float>(bf.values.begin(), bf.values.end()));

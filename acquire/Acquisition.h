@@ -8,6 +8,7 @@
 // PQ x K pattern block (bit-packed for binary families), parallel over T's rows (TBB): each row's
 // K sums are accumulated in double in T's column order by one task, and its noise comes from the
 // counter-based streams (seed, pattern, camera pixel), so Y is bit-identical for any thread count.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,14 @@ namespace ltm::acquire {
 // calibrated measurements; pattern j of the block draws its noise from stream (seed,
 // first_pattern + j, k), so blocks of one acquisition never share a stream. threads = 0: all
 // cores. T must be valid with T.cols == X.P X.Q (std::invalid_argument otherwise).
-Measurements simulate(const CsrMatrix& T, const PatternBlock& X, const SensorModel& sensor, int first_pattern,
+Measurements simulate(const CsrMatrix& T, const PatternBlock& X, const SensorModel& sensor, std::uint64_t first_pattern,
                       int threads);
+
+// The pattern index whose noise streams the bright field beside every acquisition draws from
+// (AcquireResult::bright): one no method shows (theirs count from 0 to K - 1 < 2^31), the same
+// for every method and K, so that the reference a CNR is judged against is one image whatever
+// the method.
+inline constexpr std::uint64_t kBrightFieldPattern = std::uint64_t{1} << 62;
 
 enum class Method { Gray, Stripes, Compressive, BruteForce, Fields };
 
@@ -60,7 +67,8 @@ int stripe_width_for(int K, int P, int Q);
 
 struct AcquireResult {
     FeatureImages features;  // the method's estimates, features.exr's channel names
-    FeatureImages bright;    // a bright field through the same sensor (one more image, not counted in K)
+    FeatureImages bright;    // a bright field through the same sensor (one more image, not counted in K;
+                             // its noise from kBrightFieldPattern's streams)
     std::string summary;     // what was shown: "36 Gray code + 8 phase-shift patterns (period 16 px)"
     // Wall-clock times: drawing the pattern blocks, the product Y = T X with the sensor's noise,
     // and the decoder (for brute-force, simulating is streamed inside the decoder's pass).

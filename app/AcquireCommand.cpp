@@ -157,6 +157,12 @@ int fail(const std::string& message) {
 int run(const AcquireArgs& a) {
     // Everything is read and checked before anything is computed or written.
     const fs::path npz = fs::path(a.dir) / "ltm.npz";
+    if (fs::is_regular_file(a.dir))
+        return fail(fmt::format("{} is a file, not a render folder; render it first (ltmsim render {} -o DIR) and give "
+                                "acquire that folder (ltmsim acquire DIR ...)",
+                                a.dir, a.dir));
+    if (!fs::exists(a.dir))
+        return fail(fmt::format("{}: no such folder (a render folder: ltmsim render SCENE -o {})", a.dir, a.dir));
     if (!fs::is_regular_file(npz))
         return fail(fmt::format("{}: no ltm.npz there (render it with ltmsim render SCENE -o {})", a.dir, a.dir));
     acquire::Method method;
@@ -234,7 +240,9 @@ int run(const AcquireArgs& a) {
             for (const auto& [name, v] : f.channels)
                 if (exact.has(name)) ch[name] = cnr_json(cnrs(v, kr.repeat.features.channel(name), exact.channel(name), d));
             defects.push_back({{"defect", d.defect},
-                               {"radius_mm", d.radius_mm},
+                               {"kind", d.kind},
+                               {"label", d.describe()},
+                               {"size", regions_json({d})["defects"][0]["size"]},
                                {"channels", ch},
                                {"bright_field", cnr_json(cnrs(kr.r.bright.channel("BrightField"),
                                                               kr.repeat.bright.channel("BrightField"),
@@ -274,7 +282,7 @@ int run(const AcquireArgs& a) {
             }
             ch[name] = k;
         }
-        fewest.push_back({{"defect", regions[d].defect}, {"radius_mm", regions[d].radius_mm}, {"fewest_patterns", ch}});
+        fewest.push_back({{"defect", regions[d].defect}, {"kind", regions[d].kind}, {"fewest_patterns", ch}});
     }
 
     const acquire::CameraModel& c = sensor.camera;
@@ -327,7 +335,7 @@ int run(const AcquireArgs& a) {
     for (std::size_t d = 0; d < regions.size(); ++d) {
         const Rgb colour = series_colour(static_cast<int>(d), static_cast<int>(regions.size()));
         Series acq, bright, ex;
-        acq.name = fmt::format("defect {} (r = {:g} mm), {}", regions[d].defect, regions[d].radius_mm, primary);
+        acq.name = fmt::format("defect {} ({}), {}", regions[d].defect, regions[d].describe(), primary);
         bright.name = fmt::format("defect {}, bright field", regions[d].defect);
         ex.name = fmt::format("defect {}, exact T (MC noise)", regions[d].defect);
         bright.dashed = true;
@@ -364,11 +372,27 @@ int run(const AcquireArgs& a) {
     io::write_json_file((fs::path(folder.path()) / "report.json").string(), report, "acquisition report");
     write_png((fs::path(folder.path()) / "plot.png").string(), plot);
     folder.commit();
+    // One line per K: the error of each channel, relative RMS against the exact feature of T (the
+    // report's relative_rmse), and with regions the CNR of each defect in the method's main
+    // channel beside the bright field's, both under the sensor (acquired).
     for (const KResult& kr : results) {
-        std::string line = fmt::format("K = {}:", kr.K);
+        std::string line = fmt::format("K = {} ({}): relative RMS error against the exact features of T:", kr.K, a.method);
+        const char* sep = " ";
         for (const auto& [name, e] : kr.report["errors"].items())
-            if (e["relative_rmse"].is_number()) line += fmt::format(" {} {:.3g}", name, e["relative_rmse"].get<double>());
+            if (e["relative_rmse"].is_number()) {
+                line += fmt::format("{}{} {:.3g}", sep, name, e["relative_rmse"].get<double>());
+                sep = ", ";
+            }
         std::cout << line << "\n";
+        for (std::size_t d = 0; d < regions.size(); ++d) {
+            const Json& dj = kr.report["defects"][d];
+            auto text = [](const Json& j) {
+                return j.is_number() ? fmt::format("{:.3g}", j.get<double>()) : j.is_string() ? j.get<std::string>() : "-";
+            };
+            const std::string main = dj["channels"].contains(primary) ? text(dj["channels"][primary]["acquired"]) : "-";
+            std::cout << fmt::format("  defect {} ({}): CNR under the sensor: {} {}, bright field {}\n", regions[d].defect,
+                                     regions[d].describe(), primary, main, text(dj["bright_field"]["acquired"]));
+        }
     }
     return 0;
 }

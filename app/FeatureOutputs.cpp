@@ -145,7 +145,6 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
                     write_ltm_npz((d / "ltm.npz").string(), r.T, npz);
             },
             [&] {
-                if (scene.defects.empty()) return;
                 // The interleaved x, y means, read in place (copies of them page-faulted 16 MB
                 // fresh at industrial scale, about 40 ms).
                 const std::size_t pixels = run.reference.size() / 2;
@@ -157,8 +156,7 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
                 write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}, previews,
                                      &group);
             });
-        written = {d / "ltm.npz", d / "features.exr", d / "features.npz"};
-        if (!scene.defects.empty()) written.push_back(d / "reference.exr");
+        written = {d / "ltm.npz", d / "features.exr", d / "features.npz", d / "reference.exr"};
         group.commit();
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,

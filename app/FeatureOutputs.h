@@ -39,7 +39,8 @@ void write_run_json(const std::string& dir, const Scene& scene, const RenderResu
 // keys.
 io::Json memory_json(const RenderMemory& m, const RenderResult& r, std::int64_t rows, std::size_t max_matrix_bytes);
 
-// A render folder: DIR/ltm.npz (written from T, or run.streamed_T committed when T was streamed), DIR/reference.exr (for a scene with defects), DIR/features.exr
+// A render folder: DIR/ltm.npz (written from T, or run.streamed_T committed when T was streamed), DIR/reference.exr (the defect-free
+// object's MeanX and MeanY, study/SceneRun.h), DIR/features.exr
 // and DIR/features.npz with DIR/features/*.png, and DIR/run.json (written last). On failure the
 // files this call wrote are removed and the exception rethrown.
 // previews = false (render --no-previews) leaves out DIR/features/*.png (and touches nothing

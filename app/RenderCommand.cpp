@@ -144,8 +144,8 @@ int run(const RenderArgs& a) {
 
     SceneRun run;
     if (pattern.empty()) {
-        // The matrix, its features and, for a scene with defects, the defect-free reference
-        // (study/SceneRun.h): pixels whose paths met no defect are their own reference.
+        // The matrix, its features and the defect-free reference of the deflection map, rendered
+        // with random numbers of its own (study/SceneRun.h).
         SceneRunOptions so;
         so.representation = representation;
         so.robust = !a.no_robust;

@@ -1,6 +1,8 @@
 // Contrast.h: pixel regions, contrast-to-noise ratio, robust outlier counts.
 #include "features/Contrast.h"
 
+#include "features/Features.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -57,8 +59,9 @@ struct Moments {
     int count = 0;
 };
 
-// Mean and sample standard deviation of the finite pixels of a region (two passes).
-Moments moments(const std::vector<float>& image, const Region& region, const char* name) {
+// Mean and sample standard deviation (0 for one pixel) of the finite pixels of a region (two
+// passes); at least `least` of them.
+Moments moments(const std::vector<float>& image, const Region& region, const char* name, std::size_t least) {
     std::vector<double> v;
     v.reserve(region.pixels.size());
     for (const int k : region.pixels) {
@@ -66,9 +69,10 @@ Moments moments(const std::vector<float>& image, const Region& region, const cha
         const float x = image[static_cast<std::size_t>(k)];
         if (std::isfinite(x)) v.push_back(x);
     }
-    if (v.size() < 2)
+    if (v.size() < least)
         throw std::invalid_argument(std::string("contrast_to_noise: the ") + name + " region has " +
-                                    std::to_string(v.size()) + " finite pixels; at least 2 are needed");
+                                    std::to_string(v.size()) + " finite pixels; at least " + std::to_string(least) +
+                                    (least == 1 ? " is" : " are") + " needed");
     Moments mo;
     mo.count = static_cast<int>(v.size());
     double sum = 0;
@@ -76,7 +80,7 @@ Moments moments(const std::vector<float>& image, const Region& region, const cha
     mo.mean = sum / static_cast<double>(v.size());
     double ss = 0;
     for (const double x : v) ss += (x - mo.mean) * (x - mo.mean);
-    mo.std = std::sqrt(ss / static_cast<double>(v.size() - 1));
+    mo.std = v.size() > 1 ? std::sqrt(ss / static_cast<double>(v.size() - 1)) : 0.0;
     return mo;
 }
 
@@ -118,19 +122,35 @@ Region subtract(const Region& a, const Region& b) {
     return out;
 }
 
-ContrastResult contrast_to_noise(const std::vector<float>& image, const Region& defect, const Region& surround) {
-    const Moments d = moments(image, defect, "defect");
-    const Moments s = moments(image, surround, "surround");
+ContrastResult contrast_to_noise(const std::vector<float>& image, const Region& defect, const Region& surround,
+                                 double resolution) {
+    if (!(resolution >= 0) || std::isinf(resolution))
+        throw std::invalid_argument("contrast_to_noise: the resolution must be finite and >= 0");
+    const Moments d = moments(image, defect, "defect", 1);
+    const Moments s = moments(image, surround, "surround", 2);
     ContrastResult r;
     r.defect_mean = d.mean;
     r.surround_mean = s.mean;
     r.surround_std = s.std;
+    r.noise = std::max(s.std, resolution / std::sqrt(12.0));
     r.defect_pixels = d.count;
     r.surround_pixels = s.count;
     const double diff = std::fabs(d.mean - s.mean);
-    if (s.std > 0) r.cnr = diff / s.std;
+    if (r.noise > 0) r.cnr = diff / r.noise;
     else r.cnr = diff > 0 ? std::numeric_limits<double>::infinity() : 0.0;
     return r;
+}
+
+double Resolution::of(const std::string& channel) const {
+    if (channel == "EllipseMajor" || channel == "EllipseMinor") return moment;
+    const std::string unit = feature_unit(channel);
+    if (unit == "fraction") return fraction;
+    if (unit == "mm") return mm;
+    if (unit == "display pixels") return display_pixels;
+    if (unit == "count") return count;
+    if (unit == "index") return index;
+    if (unit == "degrees") return degrees;
+    return 0;
 }
 
 int false_positives(const std::vector<float>& image, const Region& valid, double k) {

@@ -8,6 +8,7 @@
 // Positions (cx, cy) are in pixel units on the image's own axes: x to the right along columns,
 // y DOWN along rows, the top-left corner of the image at (0, 0), so camera pixel (m, n) is the
 // unit square [n, n + 1] x [m, m + 1] with its centre at (n + 0.5, m + 0.5).
+#include <string>
 #include <vector>
 
 namespace ltm {
@@ -34,16 +35,38 @@ Region subtract(const Region& a, const Region& b);
 
 struct ContrastResult {
     double defect_mean = 0, surround_mean = 0, surround_std = 0, cnr = 0;
+    double noise = 0;  // what the contrast is divided by: max(surround_std, resolution / sqrt 12)
     int defect_pixels = 0, surround_pixels = 0;  // finite pixels used
 };
 
-// Contrast-to-noise ratio CNR = |mean(defect) - mean(surround)| / std(surround), std the sample
-// standard deviation (divisor n - 1), all in double (two passes: the mean, then the squared
-// deviations). NaN (and +-inf) pixels are excluded; the counts are of the finite pixels used.
-// A noise-free surround (std == 0) gives cnr = +inf when the means differ and 0 when they are
-// equal (no contrast, no noise: nothing to see). A region with fewer than 2 finite pixels, or an
-// index outside the image, is std::invalid_argument.
-ContrastResult contrast_to_noise(const std::vector<float>& image, const Region& defect, const Region& surround);
+// Contrast-to-noise ratio CNR = |mean(defect) - mean(surround)| / noise, all in double (two
+// passes: the mean, then the squared deviations). The noise is the surround's sample standard
+// deviation (divisor n - 1), but never less than resolution / sqrt 12: an image cannot show a
+// spread finer than the step q = `resolution` its values are resolved to, and a surround whose
+// pixels all read the same value has a spread below that step. q / sqrt 12 is the standard
+// deviation of a rounding error spread uniformly over one step, the standard uncertainty the GUM
+// assigns to an indication of resolution q (JCGM 100:2008, F.2.2.1). Without it (resolution 0) a
+// noise-free surround (std == 0) gives cnr = +inf when the means differ and 0 when they are equal
+// (no contrast, no noise: nothing to see). NaN (and +-inf) pixels are excluded; the counts are of
+// the finite pixels used. A defect region with no finite pixel, a surround with fewer than 2, an
+// index outside the image, or a resolution that is negative or not finite, is
+// std::invalid_argument.
+ContrastResult contrast_to_noise(const std::vector<float>& image, const Region& defect, const Region& surround,
+                                 double resolution = 0);
+
+// The step q each kind of feature value is resolved to (contrast_to_noise's `resolution`), by the
+// unit features/Features.h gives its channel: fractions of a pixel's light (BrightField,
+// DarkField), positions in mm (MeanX/Y, Deflection*), extents between display pixel centres
+// (ScatterRows, ScatterColumns, ScatterDiameter, RobustScatterDiameter), counts, display indices
+// (ScatterWidth) and angles in degrees (EllipseAngle); the widths of the second-moment ellipse
+// (EllipseMajor, EllipseMinor), display pixels too, are energy-weighted moments and resolve as
+// finely as a mean position does: `moment`. A rendered image and a measured one resolve
+// different steps; whoever makes the image says which (study/Experiment.h, acquire/Instrument.h).
+struct Resolution {
+    double fraction = 0, mm = 0, moment = 0, display_pixels = 1, count = 1, index = 1, degrees = 1;
+    // The step for `channel`; 0 for a channel without a unit.
+    double of(const std::string& channel) const;
+};
 
 // 1 / Phi^-1(3/4) = 1.482602...: for Gaussian data, 1.4826 MAD is a consistent estimate of the
 // standard deviation (F. R. Hampel, "The influence curve and its role in robust estimation",

@@ -1118,9 +1118,34 @@ Picture draw_pseudo_colour(const std::vector<float>& values, int width, int heig
 
 }  // namespace
 
+namespace {
+
+// The rings of pseudo_colour (Plot.h, Ring), written into the picture over the data cells.
+void paint_rings(Image& img, const PseudoColourLayout& L, int pixel_scale, const std::vector<Ring>& rings) {
+    for (const Ring& ring : rings) {
+        const double X = L.image_x + ring.x * pixel_scale, Y = L.image_y + ring.y * pixel_scale;
+        const double R = ring.radius * pixel_scale;
+        const int r0 = std::max(L.image_y, static_cast<int>(std::floor(Y - R - 3))),
+                  r1 = std::min(L.image_y + L.image_h, static_cast<int>(std::ceil(Y + R + 3)));
+        const int c0 = std::max(L.image_x, static_cast<int>(std::floor(X - R - 3))),
+                  c1 = std::min(L.image_x + L.image_w, static_cast<int>(std::ceil(X + R + 3)));
+        for (int i = r0; i < r1; ++i)
+            for (int j = c0; j < c1; ++j) {
+                const double off = std::fabs(std::hypot(j + 0.5 - X, i + 0.5 - Y) - R);
+                if (off <= 1.0) fill_rect(img, j, i, 1, 1, kWhite);
+                else if (off <= 2.0) fill_rect(img, j, i, 1, 1, kBlack);
+            }
+    }
+}
+
+}  // namespace
+
 Image pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
-                    double lo, double hi, int pixel_scale, const ImageExtent& extent) {
-    return draw_pseudo_colour<Image>(values, width, height, title, lo, hi, pixel_scale, extent);
+                    double lo, double hi, int pixel_scale, const ImageExtent& extent, const std::vector<Ring>& rings) {
+    Image img = draw_pseudo_colour<Image>(values, width, height, title, lo, hi, pixel_scale, extent);
+    if (!rings.empty())
+        paint_rings(img, pseudo_colour_layout(values, width, height, title, lo, hi, pixel_scale, extent), pixel_scale, rings);
+    return img;
 }
 
 void write_pseudo_colour_png(const std::string& path, const std::vector<float>& values, int width, int height,

@@ -174,15 +174,26 @@ PseudoColourLayout pseudo_colour_layout(const std::vector<float>& values, int wi
                                         const std::string& title, double lo, double hi, int pixel_scale,
                                         const ImageExtent& extent = {});
 
+// A ring marking a spot of a pseudo-colour image (a defect in a montage): centred at (x, y), radius
+// `radius`, all in data pixels with Contrast.h's coordinates (x along columns, y down the rows,
+// data pixel (m, n) the unit square at (n, m)). Drawn by pseudo_colour over its data cells, in
+// output pixels exactly (no antialiasing): those whose centre lies within 1 of the circle of
+// radius radius * pixel_scale are white, those between 1 and 2 of it black, so the ring shows on
+// every colour of the map (white on its dark end, black on its light end); clipped to the image.
+struct Ring {
+    double x = 0, y = 0, radius = 0;
+};
+
 // `values` (width x height, row-major, row 0 on top) drawn in viridis, each pixel as a
 // pixel_scale x pixel_scale block (nearest, exactly viridis((v - lo) / (hi - lo)) with t clamped
 // to [0, 1], so values beyond the range take the end colours; NaN exactly kNanColour), with the
 // colour bar, the axes (if the extent is known) and the title (omitted when empty) as laid out
 // above. lo / hi as colour_range. White background, black text. Bad sizes (values.size() !=
 // width * height, width or height < 1, pixel_scale < 1, a scaled side beyond 32768) are
-// std::invalid_argument.
+// std::invalid_argument. `rings` are drawn over the data cells (Ring).
 Image pseudo_colour(const std::vector<float>& values, int width, int height, const std::string& title,
-                    double lo, double hi, int pixel_scale, const ImageExtent& extent = {});
+                    double lo, double hi, int pixel_scale, const ImageExtent& extent = {},
+                    const std::vector<Ring>& rings = {});
 
 // pseudo_colour written as an 8-bit RGB PNG (write_png: atomic): the same drawing in code values
 // (Image8), so the file is the one write_png(pseudo_colour(...)) writes, without the float picture.

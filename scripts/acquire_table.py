@@ -78,7 +78,7 @@ def main(out):
                             best = (run["patterns"], ch, s)
                 cells.append(f"{best[0]} ({best[1]}, {fmt(best[2])})" if best else
                              f"not visible up to K = {r['runs'][-1]['patterns']}")
-            print(f"| {scene} | {first['defect']} (r = {first['radius_mm']:g} mm) | {fmt(bright)} | "
+            print(f"| {scene} | {first['defect']} ({first['label']}) | {fmt(bright)} | "
                   f"{fmt(exact_best)} ({exact_ch}) | " + " | ".join(cells) + " |")
     print()
     print("| method | K | channel | median abs error | 95th percentile | relative RMS error |")

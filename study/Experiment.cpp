@@ -12,6 +12,8 @@
 #include "scene/SceneLoader.h"
 #include "scene/SceneSolid.h"
 #include "scene/StrictYaml.h"
+#include "defects/ScratchPath.h"
+#include "geometry/Lens.h"
 #include "study/GroundTruth.h"
 
 namespace ltm {
@@ -30,12 +32,22 @@ ExperimentSpec load_experiment(const std::string& path) {
         if (!v.IsScalar() || v.Scalar().empty()) r.fail(at, p, fmt::format("expected a name, got {}", yaml::describe(v)));
         return v.Scalar();
     };
+    // Feature channels, each one compute_features makes (features/Features.h).
+    const std::vector<std::string>& known = feature_channel_names(true);
     auto words = [&](const yaml::Item& it, const std::string& p) {
         if (!it.value.IsSequence())
             r.fail(it.value_loc(), p, fmt::format("expected a list of channel names, got {}", yaml::describe(it.value)));
         std::vector<std::string> out;
-        for (std::size_t i = 0; i < it.value.size(); ++i)
-            out.push_back(word(it.value[i], yaml::loc_of(it.value[i]), fmt::format("{}[{}]", p, i)));
+        for (std::size_t i = 0; i < it.value.size(); ++i) {
+            const std::string at = fmt::format("{}[{}]", p, i);
+            const std::string name = word(it.value[i], yaml::loc_of(it.value[i]), at);
+            if (std::find(known.begin(), known.end(), name) == known.end()) {
+                std::string list;
+                for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+                r.fail(yaml::loc_of(it.value[i]), at, fmt::format("unknown feature channel '{}' (channels: {})", name, list));
+            }
+            out.push_back(name);
+        }
         return out;
     };
     yaml::KeyRule rule;
@@ -139,26 +151,117 @@ double min_rho2_along(const PrincipalPath& p, const Vec3& start, const Defect& d
     return m;
 }
 
+// The distance between segments [p0, p1] and [q0, q1]: the closest points s, t in [0, 1] of the
+// two lines, clamped and recomputed (C. Ericson, "Real-Time Collision Detection", 2005, 5.1.9).
+double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+    const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+    const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+    double s = 0, t = 0;
+    if (a <= 0 && e <= 0) return length(r);
+    if (a <= 0) {
+        t = std::clamp(f / e, 0.0, 1.0);
+    } else {
+        const double c = dot(d1, r);
+        if (e <= 0) {
+            s = std::clamp(-c / a, 0.0, 1.0);
+        } else {
+            const double b = dot(d1, d2), denom = a * e - b * b;
+            s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0) {
+                t = 0;
+                s = std::clamp(-c / a, 0.0, 1.0);
+            } else if (t > 1) {
+                t = 1;
+                s = std::clamp((b - c) / a, 0.0, 1.0);
+            }
+        }
+    }
+    return length((p0 + d1 * s) - (q0 + d2 * t));
+}
+
+// A scratch's centre line on the face (profile point (0, 0) along its path), as a polyline of
+// points at most a tenth of a camera pixel apart (at most 513 of them).
+std::vector<Vec3> scratch_centre_line(const Scene& scene, const Defect& d, double pitch) {
+    const ScratchPath path = scratch_path(Lens(scene.object.lens), d);
+    const int n = static_cast<int>(std::clamp(std::ceil(path.path_length() / (0.1 * pitch)), 8.0, 512.0));
+    std::vector<Vec3> line;
+    for (int i = 0; i <= n; ++i) line.push_back(path.place(static_cast<double>(i) / n, Point2{0.0, 0.0}));
+    return line;
+}
+
+// The smallest distance between a principal path's polyline and another polyline.
+double min_distance_along(const PrincipalPath& p, const Vec3& start, const std::vector<Vec3>& line) {
+    Vec3 prev = start;
+    double m = INFINITY;
+    for (size_t i = 0; i <= p.vertices.size(); ++i) {
+        const Vec3 next = i < p.vertices.size() ? p.vertices[i] : prev + p.direction * 1e3;
+        for (size_t j = 0; j + 1 < line.size(); ++j) m = std::min(m, segment_distance(prev, next, line[j], line[j + 1]));
+        prev = next;
+    }
+    return m;
+}
+
 bool in_aperture(const Scene& s, const Vec3& c) { return std::hypot(c.x, c.y) <= 0.95 * 0.5 * s.object.lens.diameter; }
 
 // The geometric surround shell of defect d (see Experiment.h).
 Region surround_shell(const Tracer& free, const Scene& scene, const Defect& d) {
     const double pitch = scene.camera.size[0] / scene.camera.resolution[0];
-    const double rmin = std::min({d.semi_axes.x, d.semi_axes.y, d.semi_axes.z});
-    const double inner = 2 * rmin + 2 * pitch, outer = 5 * rmin + 4 * pitch;
+    const bool scratch = d.type == DefectType::Scratch;
+    const double r = scratch ? std::min(0.5 * d.width, d.depth) : std::min({d.semi_axes.x, d.semi_axes.y, d.semi_axes.z});
+    const double inner = 2 * r + 2 * pitch, outer = 5 * r + 4 * pitch;
+    const std::vector<Vec3> line = scratch ? scratch_centre_line(scene, d, pitch) : std::vector<Vec3>{};
     Region reg;
     for (long k = 0; k < free.camera().pixels(); ++k) {
         const Vec3 c = free.camera().pixel_centre(k);
         if (!in_aperture(scene, c)) continue;
         const Vec3 start{c.x, c.y, -1e3};
         const PrincipalPath p = free.principal_path(start, {0, 0, 1});
-        if (min_rho2_along(p, start, d, outer) <= 1.0 && min_rho2_along(p, start, d, inner) > 1.0)
-            reg.pixels.push_back(static_cast<int>(k));
+        bool in_shell;
+        if (scratch) {
+            // Beyond the tube of radius r around the centre line by inner .. outer.
+            const double dist = min_distance_along(p, start, line);
+            in_shell = dist <= r + outer && dist > r + inner;
+        } else {
+            in_shell = min_rho2_along(p, start, d, outer) <= 1.0 && min_rho2_along(p, start, d, inner) > 1.0;
+        }
+        if (in_shell) reg.pixels.push_back(static_cast<int>(k));
     }
     return reg;
 }
 
+// The size that ranks defects (the smallest are the paper's claim): the largest semi-axis of an
+// ellipsoid, the half-width of a scratch.
+double ranking_size(const Defect& d) { return d.type == DefectType::Scratch ? 0.5 * d.width : d.max_semi_axis(); }
+
 }  // namespace
+
+const std::vector<std::string>& defect_size_columns() {
+    static const std::vector<std::string> columns = {"semi_axis_a_mm", "semi_axis_b_mm", "semi_axis_c_mm",
+                                                     "width_mm",       "depth_mm",       "length_mm"};
+    return columns;
+}
+
+std::vector<std::pair<std::string, double>> defect_size(const Scene& scene, const Defect& d) {
+    if (d.type == DefectType::Scratch)
+        return {{"width_mm", d.width},
+                {"depth_mm", d.depth},
+                {"length_mm", scratch_path(Lens(scene.object.lens), d).path_length()}};
+    return {{"semi_axis_a_mm", d.semi_axes.x}, {"semi_axis_b_mm", d.semi_axes.y}, {"semi_axis_c_mm", d.semi_axes.z}};
+}
+
+std::string DefectRegions::describe() const {
+    auto at = [&](const std::string& key) {
+        for (const auto& [k, v] : size)
+            if (k == key) return v;
+        return static_cast<double>(NAN);
+    };
+    if (kind == "scratch")
+        return fmt::format("scratch {:.3g} x {:.3g} mm, {:.3g} mm long", at("width_mm"), at("depth_mm"), at("length_mm"));
+    const double a = at("semi_axis_a_mm"), b = at("semi_axis_b_mm"), c = at("semi_axis_c_mm");
+    if (a == b && b == c) return fmt::format("{} r = {:.4g} mm", kind, a);
+    return fmt::format("{} {:.3g} x {:.3g} x {:.3g} mm", kind, a, b, c);
+}
 
 std::vector<DefectRegions> experiment_regions(const ExperimentSpec& spec, const ExperimentScene& r) {
     std::vector<DefectRegions> out;
@@ -174,7 +277,8 @@ std::vector<DefectRegions> experiment_regions(const ExperimentSpec& spec, const 
         const Defect& d = scene.defects[k];
         DefectRegions g;
         g.defect = static_cast<int>(k);
-        g.radius_mm = d.max_semi_axis();
+        g.kind = to_string(d.type);
+        g.size = defect_size(scene, d);
         g.defect_pixels = traced_defect_region(scene, r.run.render, static_cast<int>(k), spec.defect_fraction);
         auto& px = g.defect_pixels.pixels;
         px.erase(std::remove_if(px.begin(), px.end(), [&](int p) { return !in_aperture(scene, free.camera().pixel_centre(p)); }),
@@ -187,9 +291,12 @@ std::vector<DefectRegions> experiment_regions(const ExperimentSpec& spec, const 
 
 io::Json regions_json(const std::vector<DefectRegions>& regions) {
     io::Json defects = io::Json::array();
-    for (const DefectRegions& g : regions)
-        defects.push_back({{"defect", g.defect}, {"radius_mm", g.radius_mm}, {"defect_pixels", g.defect_pixels.pixels},
+    for (const DefectRegions& g : regions) {
+        io::Json size = io::Json::object();
+        for (const auto& [k, v] : g.size) size[k] = v;
+        defects.push_back({{"defect", g.defect}, {"kind", g.kind}, {"size", size}, {"defect_pixels", g.defect_pixels.pixels},
                            {"surround_pixels", g.surround.pixels}});
+    }
     return {{"defects", defects}};
 }
 
@@ -205,11 +312,17 @@ std::vector<DefectRegions> read_regions_json(const std::string& path, long pixel
         const std::string at = fmt::format("defects[{}]", i);
         if (!d.is_object()) fail(at + ": expected an object");
         DefectRegions g;
-        for (const char* key : {"defect", "radius_mm", "defect_pixels", "surround_pixels"})
+        for (const char* key : {"defect", "kind", "size", "defect_pixels", "surround_pixels"})
             if (!d.contains(key)) fail(fmt::format("{}: missing key '{}'", at, key));
-        if (!d["defect"].is_number_integer() || !d["radius_mm"].is_number()) fail(at + ": defect must be an integer, radius_mm a number");
+        if (!d["defect"].is_number_integer()) fail(at + ".defect: expected an integer");
+        if (!d["kind"].is_string()) fail(at + ".kind: expected a defect kind");
+        if (!d["size"].is_object()) fail(at + ".size: expected an object of sizes in mm");
         g.defect = d["defect"].get<int>();
-        g.radius_mm = d["radius_mm"].get<double>();
+        g.kind = d["kind"].get<std::string>();
+        for (const auto& [k, v] : d["size"].items()) {
+            if (!v.is_number()) fail(fmt::format("{}.size.{}: expected a number (mm)", at, k));
+            g.size.emplace_back(k, v.get<double>());
+        }
         for (const char* key : {"defect_pixels", "surround_pixels"}) {
             const io::Json& a = d[key];
             if (!a.is_array()) fail(fmt::format("{}.{}: expected a list of pixel indices", at, key));
@@ -225,111 +338,307 @@ std::vector<DefectRegions> read_regions_json(const std::string& path, long pixel
     return out;
 }
 
-ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vector<ExperimentScene>& runs) {
+Resolution rendered_resolution(const Scene& scene) {
+    // One sample of S carries 1 / S of a pixel's light, and moving it by one display pixel moves
+    // the pixel's energy-weighted moments (mean position, ellipse widths) by 1 / S of a pitch.
+    const double S = scene.camera.samples_per_pixel;
+    Resolution q;
+    q.fraction = 1.0 / S;
+    q.mm = std::min(scene.display.size[0] / scene.display.resolution[0], scene.display.size[1] / scene.display.resolution[1]) / S;
+    q.moment = 1.0 / S;
+    return q;
+}
+
+namespace {
+
+// One image's CNR of one defect: none (a NaN) only when the defect has no finite pixel in it, or
+// its surround fewer than 2 (a decoder's NaN rows). A defect with no traced pixel at all has no
+// image: its CNR is 0 (defect_pixels 0).
+ContrastResult measure_cnr(const std::vector<float>& image, const DefectRegions& g, double resolution) {
+    ContrastResult c;
+    if (g.defect_pixels.pixels.empty()) return c;  // not imaged: no contrast
+    int nd = 0, ns = 0;
+    for (int k : g.defect_pixels.pixels) nd += std::isfinite(image[static_cast<std::size_t>(k)]) ? 1 : 0;
+    for (int k : g.surround.pixels) ns += std::isfinite(image[static_cast<std::size_t>(k)]) ? 1 : 0;
+    if (nd < 1 || ns < 2) {
+        c.cnr = NAN;
+        return c;
+    }
+    return contrast_to_noise(image, g.defect_pixels, g.surround, resolution);
+}
+
+// The valid pixels of the false-positive count: within 0.95 of the clear aperture.
+Region aperture_pixels(const Scene& s) {
+    Region valid;
+    const TelecentricCamera camera(s.camera, 0.0);
+    for (long k = 0; k < camera.pixels(); ++k)
+        if (in_aperture(s, camera.pixel_centre(k))) valid.pixels.push_back(static_cast<int>(k));
+    return valid;
+}
+
+std::string cnr_text(double c) { return std::isnan(c) ? std::string("-") : fmt::format("{:.3g}", c); }
+
+// The numbers of one image kind (rendered or measured) over every scene and defect.
+struct ImageNumbers {
+    std::map<std::string, std::vector<double>> cnr;            // channel -> per defect column
+    std::map<std::string, std::vector<double>> smallest_cnr;   // channel -> CNRs of the smallest defects
+    std::map<std::string, int> false_pos;                      // channel -> in the reference scene
+};
+
+// CNR >= this shows a defect (the Rose criterion: A. Rose, "Vision: Human and Electronic", 1973;
+// the threshold `ltmsim acquire` calls visible).
+constexpr double kVisibleCnr = 5.0;
+
+// The weakest CNR of a list (one that could not be measured, NaN, counts as -1), NaN if empty.
+double weakest_of(const std::vector<double>& v) {
+    double w = INFINITY;
+    for (double c : v) w = std::min(w, std::isnan(c) ? -1.0 : c);
+    return v.empty() ? NAN : w;
+}
+
+// The best candidate (see Experiment.h): among those whose weakest CNR over the smallest defects
+// reaches kVisibleCnr, the fewest false positives, then the largest weakest CNR; if none reaches
+// it, the largest weakest CNR. "" if no candidate has numbers.
+std::string best_candidate(const std::vector<std::string>& candidates, const ImageNumbers& n, double* weakest_out) {
+    std::string best;
+    bool best_visible = false;
+    int best_fp = INT32_MAX;
+    double best_cnr = -INFINITY;
+    for (const auto& ch : candidates) {
+        const auto it = n.smallest_cnr.find(ch);
+        if (it == n.smallest_cnr.end() || it->second.empty()) continue;
+        const auto fp_it = n.false_pos.find(ch);
+        const int fp = fp_it == n.false_pos.end() ? INT32_MAX - 1 : fp_it->second;
+        const double weakest = weakest_of(it->second);
+        const bool visible = weakest >= kVisibleCnr;
+        const bool better = best.empty() || (visible && !best_visible) ||
+                            (visible == best_visible &&
+                             (visible ? (fp < best_fp || (fp == best_fp && weakest > best_cnr)) : weakest > best_cnr));
+        if (better) {
+            best = ch;
+            best_visible = visible;
+            best_fp = fp;
+            best_cnr = weakest;
+        }
+    }
+    if (weakest_out) *weakest_out = best_cnr;
+    return best;
+}
+
+// The montage's marks: a ring around each defect's traced pixels, in data pixels (Contrast.h's
+// coordinates), through their centroid and a pixel and a half beyond the farthest of them.
+std::vector<Ring> defect_rings(const std::vector<DefectRegions>& regions, int width) {
+    std::vector<Ring> rings;
+    for (const DefectRegions& g : regions) {
+        if (g.defect_pixels.pixels.empty()) continue;
+        double cx = 0, cy = 0;
+        for (int k : g.defect_pixels.pixels) {
+            cx += k % width + 0.5;
+            cy += k / width + 0.5;
+        }
+        cx /= static_cast<double>(g.defect_pixels.pixels.size());
+        cy /= static_cast<double>(g.defect_pixels.pixels.size());
+        double r = 0;
+        for (int k : g.defect_pixels.pixels) r = std::max(r, std::hypot(k % width + 0.5 - cx, k / width + 0.5 - cy));
+        rings.push_back({cx, cy, r + 1.5});
+    }
+    return rings;
+}
+
+}  // namespace
+
+ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vector<ExperimentScene>& runs,
+                                     const Measurement* measured) {
+    if (measured && measured->scenes.size() != runs.size())
+        throw std::invalid_argument("evaluate_experiment: one measurement per scene is needed");
     ExperimentResult out;
     std::vector<std::string> channels;
     for (const auto& r : runs)
         for (const auto& [name, v] : r.run.features.channels)
             if (std::find(channels.begin(), channels.end(), name) == channels.end()) channels.push_back(name);
-    std::string csv = "scene,defect,radius_mm,channel,defect_mean,surround_mean,surround_std,cnr,defect_pixels,surround_pixels\n";
-    std::map<std::string, std::vector<double>> smallest_cnr;  // channel -> CNRs of the smallest defects
-    double smallest_radius = INFINITY;
+    double smallest = INFINITY;
     for (const auto& r : runs)
-        for (const auto& d : r.scene.defects) smallest_radius = std::min(smallest_radius, d.max_semi_axis());
+        for (const auto& d : r.scene.defects) smallest = std::min(smallest, ranking_size(d));
+
+    std::string csv = "scene,defect,kind";
+    for (const auto& c : defect_size_columns()) csv += "," + c;
+    csv += ",channel,defect_pixels,surround_pixels,defect_mean,surround_mean,surround_std,noise,cnr";
+    if (measured) csv += ",measured_by,measured_defect_mean,measured_surround_mean,measured_surround_std,measured_noise,measured_cnr";
+    csv += "\n";
     std::vector<std::string> md_columns;
-    std::map<std::string, std::vector<double>> md_rows;
-    for (const auto& r : runs) {
+    ImageNumbers rendered, meas;
+    for (std::size_t si = 0; si < runs.size(); ++si) {
+        const ExperimentScene& r = runs[si];
+        const MeasuredImages* m = measured ? &measured->scenes[si] : nullptr;
+        const Resolution q = rendered_resolution(r.scene);
         out.regions.push_back(experiment_regions(spec, r));
-        const std::vector<DefectRegions>& regions = out.regions.back();
-        for (const DefectRegions& g : regions) {
+        for (const DefectRegions& g : out.regions.back()) {
             const int k = g.defect;
+            const bool small = ranking_size(r.scene.defects[static_cast<std::size_t>(k)]) == smallest;
             md_columns.push_back(fmt::format("{} #{}", r.label, k));
             for (const auto& ch : channels) {
                 if (!r.run.features.has(ch)) continue;
-                ContrastResult c;
-                if (g.defect_pixels.pixels.size() >= 2 && g.surround.pixels.size() >= 2)
-                    c = contrast_to_noise(r.run.features.channel(ch), g.defect_pixels, g.surround);
-                else
-                    c.cnr = NAN;  // the defect is not seen at this resolution
-                csv += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", r.stem, k, g.radius_mm, ch, c.defect_mean,
-                                   c.surround_mean, c.surround_std, c.cnr, c.defect_pixels, c.surround_pixels);
-                md_rows[ch].push_back(c.cnr);
-                if (g.radius_mm == smallest_radius) smallest_cnr[ch].push_back(c.cnr);
+                const ContrastResult c = measure_cnr(r.run.features.channel(ch), g, q.of(ch));
+                std::string line = fmt::format("{},{},{}", r.stem, k, g.kind);
+                for (const auto& col : defect_size_columns()) {
+                    std::string v;
+                    for (const auto& [key, value] : g.size)
+                        if (key == col) v = fmt::format("{}", value);
+                    line += "," + v;
+                }
+                line += fmt::format(",{},{},{},{},{},{},{},{}", ch, c.defect_pixels, c.surround_pixels, c.defect_mean,
+                                    c.surround_mean, c.surround_std, c.noise, c.cnr);
+                rendered.cnr[ch].push_back(c.cnr);
+                if (small) rendered.smallest_cnr[ch].push_back(c.cnr);
+                if (measured) {
+                    ContrastResult mc;
+                    mc.cnr = NAN;
+                    std::string how;
+                    if (m->features.has(ch)) {
+                        mc = measure_cnr(m->features.channel(ch), g, m->resolution.at(ch));
+                        how = m->how.at(ch);
+                    }
+                    line += fmt::format(",{},{},{},{},{},{}", how, mc.defect_mean, mc.surround_mean, mc.surround_std,
+                                        mc.noise, mc.cnr);
+                    meas.cnr[ch].push_back(mc.cnr);
+                    if (small && m->features.has(ch)) meas.smallest_cnr[ch].push_back(mc.cnr);
+                }
+                csv += line + "\n";
             }
         }
     }
     // False positives of the reference scene, within 0.95 of the clear aperture.
-    std::map<std::string, int> false_pos;
-    for (const auto& r : runs) {
+    std::string fp_csv = "scene,channel,false_positives";
+    if (measured) fp_csv += ",measured_false_positives";
+    fp_csv += "\n";
+    for (std::size_t si = 0; si < runs.size(); ++si) {
+        const ExperimentScene& r = runs[si];
         if (r.file != spec.reference) continue;
-        const Scene& s = r.scene;
-        Region valid;
-        const TelecentricCamera camera(s.camera, 0.0);
-        for (long k = 0; k < camera.pixels(); ++k)
-            if (in_aperture(s, camera.pixel_centre(k))) valid.pixels.push_back(static_cast<int>(k));
+        const Region valid = aperture_pixels(r.scene);
         for (const auto& ch : channels) {
             if (!r.run.features.has(ch)) continue;
-            false_pos[ch] = false_positives(r.run.features.channel(ch), valid);
-            csv += fmt::format("{},,,{},,,,,,false_positives={}\n", r.stem, ch, false_pos[ch]);
+            rendered.false_pos[ch] = false_positives(r.run.features.channel(ch), valid);
+            fp_csv += fmt::format("{},{},{}", r.stem, ch, rendered.false_pos[ch]);
+            if (measured) {
+                const MeasuredImages& m = measured->scenes[si];
+                if (m.features.has(ch)) {
+                    meas.false_pos[ch] = false_positives(m.features.channel(ch), valid);
+                    fp_csv += fmt::format(",{}", meas.false_pos[ch]);
+                } else {
+                    fp_csv += ",";
+                }
+            }
+            fp_csv += "\n";
         }
-    }
-    // The best new feature: among the candidates with the fewest false positives in the
-    // reference scene, the one whose weakest smallest-defect CNR is largest (an infinite CNR, from
-    // a noise-free surround, ranks above any finite one; a defect not seen ranks lowest).
-    int best_fp = INT32_MAX;
-    double best_cnr = -1;
-    for (const auto& ch : spec.candidates) {
-        const auto it = smallest_cnr.find(ch);
-        if (it == smallest_cnr.end() || it->second.empty()) continue;
-        const int fp = false_pos.count(ch) ? false_pos[ch] : 0;
-        double weakest = INFINITY;
-        for (double c : it->second) weakest = std::min(weakest, std::isnan(c) ? -1.0 : c);
-        if (fp < best_fp || (fp == best_fp && weakest > best_cnr)) {
-            best_fp = fp;
-            best_cnr = weakest;
-            out.best = ch;
-        }
-    }
-    std::string md = fmt::format(
-        "# Contrast-to-noise ratio of every defect in every image\n\nCNR = |mean(defect) - mean(surround)| / "
-        "std(surround). Defect: the pixels at least {:g} of whose paths meet the defect first (traced); surround: the "
-        "shell 2r + 2 px .. 5r + 4 px beyond the defect's ellipsoid (r its smallest semi-axis) along the defect-free "
-        "object's centre rays, minus every pixel a path of which met a defect. False positives: defect-free pixels "
-        "within 0.95 of the aperture more than 5 x 1.4826 MAD from the median. Best new feature (fewest false positives, "
-        "then the largest weakest CNR over the smallest defects): **{}**.\n\n| image |",
-        spec.defect_fraction, out.best);
-    for (const auto& c : md_columns) md += " " + c + " |";
-    md += " false positives (defect-free) |\n|---|";
-    for (size_t i = 0; i <= md_columns.size(); ++i) md += "---|";
-    md += "\n";
-    for (const auto& ch : channels) {
-        if (md_rows[ch].empty()) continue;
-        md += "| " + ch + " |";
-        for (double c : md_rows[ch]) md += std::isnan(c) ? std::string(" not seen |") : fmt::format(" {:.3g} |", c);
-        md += fmt::format(" {} |\n", false_pos.count(ch) ? std::to_string(false_pos[ch]) : "");
     }
     out.csv = std::move(csv);
+    out.false_positives_csv = std::move(fp_csv);
+
+    // The best new feature, on the measured images when there are any.
+    const ImageNumbers& judged = measured ? meas : rendered;
+    double weakest = NAN;
+    out.best = best_candidate(spec.candidates, judged, &weakest);
+    const std::string where = measured ? "measured under the sensor model" : "in the rendered images";
+    if (spec.candidates.empty()) {
+        out.headline = "No new feature is judged: experiment.yaml lists no candidates.";
+    } else if (out.best.empty()) {
+        out.headline = "No candidate has a CNR on the smallest defects.";
+    } else {
+        const auto bf = judged.smallest_cnr.find("BrightField");
+        const auto fp = judged.false_pos.find(out.best);
+        const int fps = fp == judged.false_pos.end() ? -1 : fp->second;
+        out.headline = fmt::format(
+            "Best new feature {}: **{}**{}: weakest CNR {} on the smallest defects against the bright field's {}; {} in "
+            "the defect-free scene.",
+            where, out.best,
+            measured && measured->scenes.front().how.count(out.best)
+                ? ", by " + measured->scenes.front().how.at(out.best)
+                : std::string(),
+            cnr_text(weakest), bf == judged.smallest_cnr.end() ? std::string("-") : cnr_text(weakest_of(bf->second)),
+            fps < 0 ? std::string("no count of false positives") : fmt::format("{} false positive{}", fps, fps == 1 ? "" : "s"));
+    }
+
+    std::string md = "# Contrast-to-noise ratio of every defect in every image\n\n" + out.headline + "\n\n";
+    md += fmt::format(
+        "CNR = |mean(defect) - mean(surround)| / noise, the noise the surround's standard deviation but never less than "
+        "the image's resolution q / sqrt 12 (docs/features.md). Defect: the pixels at least {:g} of whose paths meet the "
+        "defect first (traced); surround: the shell 2r + 2 px .. 5r + 4 px beyond the defect (its ellipsoid, r its "
+        "smallest semi-axis; a scratch's tube, r the smaller of its half-width and depth) along the defect-free object's "
+        "centre rays, minus every pixel a path of which met a defect; both within 0.95 of the clear aperture. False "
+        "positives: defect-free pixels within 0.95 of the aperture more than 5 x 1.4826 MAD from the median. Best new "
+        "feature: among the candidates whose weakest CNR over the smallest defects is at least 5 (the Rose criterion), "
+        "the fewest false positives, then the largest weakest CNR; if none reaches 5, the largest weakest CNR. A '-' is a defect whose image has no finite pixel (or a surround with fewer than 2); a defect no "
+        "path met has no image and CNR 0.\n\n",
+        spec.defect_fraction);
+    auto table = [&](const std::string& title, const ImageNumbers& n, const MeasuredImages* how) {
+        md += "## " + title + "\n\n| image |" + (how ? std::string(" measured by |") : std::string());
+        for (const auto& c : md_columns) md += " " + c + " |";
+        md += " false positives (defect-free) |\n|---|";
+        for (size_t i = 0; i <= md_columns.size() + (how ? 1 : 0); ++i) md += "---|";
+        md += "\n";
+        for (const auto& ch : channels) {
+            const auto it = n.cnr.find(ch);
+            if (it == n.cnr.end() || it->second.empty()) continue;
+            if (how && !how->how.count(ch)) continue;
+            md += "| " + ch + " |" + (how ? " " + how->how.at(ch) + " |" : std::string());
+            for (double c : it->second) md += " " + cnr_text(c) + " |";
+            const auto fp = n.false_pos.find(ch);
+            md += fmt::format(" {} |\n", fp == n.false_pos.end() ? std::string("-") : std::to_string(fp->second));
+        }
+        md += "\n";
+    };
+    if (measured)
+        table("Measured: the images an instrument would take (" + measured->instrument + ")", meas,
+              &measured->scenes.front());
+    table("Rendered: the images of T itself (Monte Carlo noise; the deflection map against an independently rendered "
+          "reference)",
+          rendered, nullptr);
     out.markdown = std::move(md);
 
-    // The montage: rows are images, columns are scenes.
-    std::vector<std::string> rows = spec.montage;
-    if (!out.best.empty()) rows.push_back(out.best);
+    // The montage: rows are images, columns are scenes; one colour scale per row (the range of the
+    // row's finite values over every scene), each defect ringed. The best new feature follows the
+    // montage's rows as rendered and, when it was judged on them, as measured.
+    struct Row {
+        std::string channel;
+        bool measured = false;
+    };
+    std::vector<Row> rows;
+    for (const auto& ch : spec.montage) rows.push_back({ch, false});
+    if (!out.best.empty() && std::find(spec.montage.begin(), spec.montage.end(), out.best) == spec.montage.end())
+        rows.push_back({out.best, false});
+    if (!out.best.empty() && measured) rows.push_back({out.best, true});
+    auto image_of = [&](std::size_t si, const Row& row) -> const FeatureImages& {
+        return row.measured ? measured->scenes[si].features : runs[si].run.features;
+    };
     std::vector<std::vector<Image>> cells;
     std::vector<std::string> col_labels;
     for (const auto& r : runs) col_labels.push_back(r.label);
     std::vector<std::string> row_labels;
-    for (const auto& ch : rows) {
-        std::vector<Image> row;
-        for (const auto& r : runs)
-            row.push_back(r.run.features.has(ch)
-                              ? pseudo_colour(r.run.features.channel(ch), r.run.features.width, r.run.features.height, "",
-                                              NAN, NAN, std::max(1, 300 / r.run.features.width),
-                                              {r.scene.camera.size[0], r.scene.camera.size[1]})
-                              : Image{});
-        cells.push_back(std::move(row));
-        row_labels.push_back(feature_title(ch));
+    for (const Row& row : rows) {
+        std::vector<float> all;
+        for (std::size_t si = 0; si < runs.size(); ++si)
+            if (image_of(si, row).has(row.channel)) {
+                const auto& v = image_of(si, row).channel(row.channel);
+                all.insert(all.end(), v.begin(), v.end());
+            }
+        const auto [lo, hi] = colour_range(all, NAN, NAN);
+        std::vector<Image> cells_of_row;
+        for (std::size_t si = 0; si < runs.size(); ++si) {
+            const FeatureImages& f = image_of(si, row);
+            if (!f.has(row.channel)) {
+                cells_of_row.emplace_back();
+                continue;
+            }
+            const Scene& sc = runs[si].scene;
+            cells_of_row.push_back(pseudo_colour(f.channel(row.channel), f.width, f.height, "", lo, hi,
+                                                 std::max(1, 300 / f.width), {sc.camera.size[0], sc.camera.size[1]},
+                                                 defect_rings(out.regions[si], f.width)));
+        }
+        cells.push_back(std::move(cells_of_row));
+        row_labels.push_back(feature_title(row.channel) + (row.measured ? ", measured" : ""));
     }
-    out.montage = montage(cells, row_labels, col_labels, "Simulated inspection images (columns: scenes; rows: images)");
+    out.montage = montage(cells, row_labels, col_labels,
+                          "Simulated inspection images (columns: scenes; rows: images, one colour scale each; rings: defects)");
     return out;
 }
 

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <filesystem>
 #include <fmt/format.h>
+#include <limits>
+#include <numeric>
 #include <optional>
 #include <stdexcept>
 
 #include "io/PeakRss.h"
+#include "trace/Rng.h"
 
 #include "scene/SceneSolid.h"
 
@@ -53,6 +56,27 @@ private:
     FeatureOptions options_;
 };
 
+// The rows of the reference's render reduced to their mean display positions as they arrive
+// (in row order, from the render's appending thread): 2 floats per camera pixel.
+class ReferenceMeans : public RowSink {
+public:
+    ReferenceMeans(const DisplayGrid& display, long pixels)
+        : display_(display), mean(2 * static_cast<size_t>(pixels), std::numeric_limits<float>::quiet_NaN()) {}
+
+    void rows(std::int64_t first_row, const CsrMatrix& block) override {
+        std::vector<long> rows(static_cast<size_t>(block.rows));
+        std::iota(rows.begin(), rows.end(), 0L);
+        const std::vector<float> m = mean_positions(block, rows, display_, FeatureOptions{}.threshold);
+        std::copy(m.begin(), m.end(), mean.begin() + 2 * first_row);
+    }
+
+private:
+    DisplayGrid display_;
+
+public:
+    std::vector<float> mean;
+};
+
 }  // namespace
 
 Representation auto_representation(const Solid& solid) {
@@ -68,53 +92,43 @@ FeatureOptions resolved_feature_options(const Scene& s, FeatureOptions o) {
     return o;
 }
 
-std::vector<float> defect_free_reference(const Scene& scene, const RenderResult& own, const std::vector<float>& mx,
-                                         const std::vector<float>& my, Representation representation,
-                                         const RenderOptions& options, long* rendered_pixels, ReferenceCache* cache,
-                                         long* reused_pixels) {
-    const long K = static_cast<long>(mx.size());
-    std::vector<float> ref(2 * static_cast<size_t>(K));
-    for (long k = 0; k < K; ++k) {
-        ref[2 * static_cast<size_t>(k)] = mx[static_cast<size_t>(k)];
-        ref[2 * static_cast<size_t>(k) + 1] = my[static_cast<size_t>(k)];
-    }
+std::uint64_t reference_seed(const Scene& scene, const RenderOptions& options) {
+    return mix_seed(render_seed(scene, options), kReferenceStream);
+}
+
+std::vector<float> defect_free_reference(const Scene& scene, Representation representation, const RenderOptions& options,
+                                         long* rendered_pixels, ReferenceCache* cache, long* reused_pixels) {
+    const long K = static_cast<long>(scene.camera.resolution[0]) * scene.camera.resolution[1];
     if (rendered_pixels) *rendered_pixels = 0;
     if (reused_pixels) *reused_pixels = 0;
-    if (scene.defects.empty()) return ref;
-    if (!own.tracked_defects)
-        throw std::invalid_argument("defect_free_reference: the render must track its defects (RenderOptions::track_defects)");
-    std::vector<long> met;
-    for (const DefectPaths& e : own.defect_paths)
-        if (met.empty() || met.back() != e.pixel) met.push_back(e.pixel);
     const Representation ref_rep = reference_representation(representation);
-    const std::string key = cache ? ReferenceCache::key(scene, render_seed(scene, options), ref_rep) : std::string();
+    const std::string key = cache ? ReferenceCache::key(scene, reference_seed(scene, options), ref_rep) : std::string();
     if (cache) {
-        const size_t all = met.size();
-        met = cache->fill(key, met, K, ref);
-        if (reused_pixels) *reused_pixels = static_cast<long>(all - met.size());
+        if (std::optional<std::vector<float>> found = cache->find(key)) {
+            if (reused_pixels) *reused_pixels = K;
+            return std::move(*found);
+        }
     }
-    if (rendered_pixels) *rendered_pixels = static_cast<long>(met.size());
-    if (met.empty()) return ref;
-    const Scene free = defect_free(scene);
+    // The defect-free scene whose render seed is reference_seed: its own seed is the scene's
+    // render seed, mixed with kReferenceStream by RenderOptions::stream.
+    Scene free = defect_free(scene);
+    free.seed = render_seed(scene, options);
     const Solid free_solid = build_solid(free, nullptr, representation != Representation::MeshOnly);
     TracerOptions o;
     o.representation = ref_rep;
-    RenderOptions ro = options;
-    ro.pattern = nullptr;
-    ro.progress = false;
-    ro.track_defects = false;
-    ro.pixels = &met;
-    ro.row_sink = nullptr;  // a subset render keeps its small T
-    const RenderResult free_render = render(Tracer(free, free_solid, o), ro);
-    // The means of the traced rows alone (compute_features's MeanX and MeanY, at its default
-    // threshold), not every channel of every pixel.
-    const std::vector<float> m = mean_positions(free_render.T, met, display_grid(scene), FeatureOptions{}.threshold);
-    for (size_t j = 0; j < met.size(); ++j) {
-        ref[2 * static_cast<size_t>(met[j])] = m[2 * j];
-        ref[2 * static_cast<size_t>(met[j]) + 1] = m[2 * j + 1];
-    }
-    if (cache) cache->store(key, met, K, ref);
-    return ref;
+    RenderOptions ro;
+    ro.threads = options.threads;
+    ro.stream = kReferenceStream;
+    // Every row goes to the means as it passes (a budget of one byte streams them all): the
+    // defect-free object's T is never held. The means are compute_features's MeanX and MeanY at
+    // its default threshold.
+    ReferenceMeans means(display_grid(scene), K);
+    ro.row_sink = &means;
+    ro.max_matrix_bytes = 1;
+    render(Tracer(free, free_solid, o), ro);
+    if (rendered_pixels) *rendered_pixels = K;
+    if (cache) cache->store(key, means.mean);
+    return std::move(means.mean);
 }
 
 Representation reference_representation(Representation r) {
@@ -146,7 +160,6 @@ SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions
     std::optional<io::PeakRssMeter> meter;
     if (options.measure_memory) meter.emplace();
     out.render = render(tracer, ro);
-    ro.row_sink = nullptr;  // the reference's subset renders keep their small T
     if (meter) {
         out.render_memory = {true, meter->peak_bytes(), meter->start_bytes(), meter->per_run(), meter->method()};
     }
@@ -169,23 +182,12 @@ SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions
     t_features.done(fmt::format("{} channels{}", out.features.channels.size(), r.streamed ? ", from the streamed rows" : ""));
 
     StageTimer t_ref(report, "reference");
-    out.reference = defect_free_reference(scene, r, out.features.channel("MeanX"), out.features.channel("MeanY"),
-                                          options.representation, ro, &out.reference_pixels, options.reference_cache,
+    out.reference = defect_free_reference(scene, options.representation, ro, &out.reference_pixels, options.reference_cache,
                                           &out.reference_reused);
-    // A defect-free scene traced exactly as its reference would be (the same representation,
-    // Embree's default traversal, every entry > 0 counted in the means) is every pixel's reference.
-    if (options.reference_cache && scene.defects.empty() && options.representation == reference_representation(options.representation) &&
-        options.robust == TracerOptions{}.robust && options.features.threshold == 0) {
-        std::vector<long> all(static_cast<size_t>(out.reference.size() / 2));
-        for (size_t k = 0; k < all.size(); ++k) all[k] = static_cast<long>(k);
-        options.reference_cache->store(ReferenceCache::key(scene, render_seed(scene, ro), options.representation), all,
-                                       static_cast<long>(all.size()), out.reference);
-    }
-    add_deflection(out.features, out.reference);  // exactly 0 for a defect-free scene (its own reference)
-    t_ref.done(scene.defects.empty() ? std::string("the scene itself (defect-free)")
-                                     : fmt::format("defect-free object at the {} pixels whose paths met a defect "
-                                                   "({} more from the scenes before)",
-                                                   out.reference_pixels, out.reference_reused));
+    add_deflection(out.features, out.reference);
+    t_ref.done(out.reference_reused > 0
+                   ? std::string("the defect-free object's, rendered for a scene before")
+                   : fmt::format("the defect-free object, {} pixels, independent random numbers", out.reference_pixels));
     return out;
 }
 

@@ -4,11 +4,17 @@
 // defect-free reference of the deflection map, and the feature images.
 //
 // The reference. The deflection map is the mean display position of each camera pixel minus that
-// of the defect-free object. Both are rendered with the same random numbers, so a pixel none of
-// whose paths met a defect traces exactly the paths of the defect-free object: its reference is
-// its own mean and its deflection exactly 0. Only the pixels some path of which met a defect are
-// rendered again without the defects (RenderOptions::pixels), which makes the reference cost in
-// proportion to the defects' images instead of a second full render.
+// of the defect-free object (docs/features.md). An instrument measures that reference separately,
+// on a golden sample, and its measurement carries noise of its own. So does this one: the same
+// scene without its defects is rendered at every pixel with random numbers of its own, the seed
+// reference_seed (mix_seed of the scene's render seed and kReferenceStream, trace/Rng.h), which
+// no render of the scene itself uses. Away from the defects the deflection map therefore shows the
+// difference of two independent Monte Carlo estimates of the same means (its noise is sqrt 2
+// times one render's), as the difference of two measurements would. The seed depends on the
+// scene's seed (and RenderOptions::stream) only, so the reference, and every deflection, is
+// bit-identical for any thread count. It costs one more render of the defect-free object (in the
+// analytic representation, whatever the scene's), whose rows are reduced to their means as they
+// pass (a RowSink), so it never holds that object's T.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -32,8 +38,8 @@ struct SceneRunOptions {
     bool progress = false;
     // dark_block < 0: automatic, 60 display pixels or the display's smaller side if less.
     FeatureOptions features{0.0, 0.99, -1};
-    // Shared by scenes with the same object (study/ReferenceCache.h): each pixel's reference is
-    // rendered once for all of them. A defect-free scene run through it gives every pixel's.
+    // Shared by scenes with the same object, camera, display and seed (study/ReferenceCache.h):
+    // the reference is rendered once for all of them.
     ReferenceCache* reference_cache = nullptr;
     // Streaming (`render --max-memory`): when T's arrays would exceed max_matrix_bytes (> 0), its
     // rows go to an io::LtmFileStream for `stream_path` (the ltm.npz to be; its folder is created
@@ -61,7 +67,7 @@ struct SceneRun {
     RenderResult render;             // T, path statistics, defect_paths
     std::vector<float> reference;    // MeanX, MeanY of the defect-free object, 2 per camera pixel
     FeatureImages features;          // with Deflection* (exactly 0 for a defect-free scene)
-    long reference_pixels = 0;       // pixels rendered again without the defects
+    long reference_pixels = 0;       // pixels of the reference rendered by this run (all, or 0 if cached)
     long reference_reused = 0;       // pixels whose reference came from the cache
     // render.streamed: T's rows, spilled beside stream_path, waiting for commit() (the archive).
     std::shared_ptr<LtmFileStream> streamed_T;
@@ -80,12 +86,18 @@ FeatureOptions resolved_feature_options(const Scene& scene, FeatureOptions optio
 // The whole pipeline; stages "trace-setup", "render", "reference", "features" go to `report`.
 SceneRun run_scene(const Scene& scene, const Solid& solid, const SceneRunOptions& options, StageReport* report);
 
-// The reference for `own`, a render of `scene` with track_defects (see above). A defect-free
-// scene is its own reference. `own_means`: own's MeanX and MeanY channels.
-std::vector<float> defect_free_reference(const Scene& scene, const RenderResult& own, const std::vector<float>& own_mean_x,
-                                         const std::vector<float>& own_mean_y, Representation representation,
-                                         const RenderOptions& options, long* rendered_pixels = nullptr,
-                                         ReferenceCache* cache = nullptr, long* reused_pixels = nullptr);
+// The seed of the reference's random numbers for a render of `scene` with `options` (see above).
+inline constexpr std::uint64_t kReferenceStream = 0x7265666572656e63ull;  // "referenc"
+std::uint64_t reference_seed(const Scene& scene, const RenderOptions& options);
+
+// The reference for a render of `scene` with `options` (see above): MeanX, MeanY of the defect-free
+// object, 2 per camera pixel (NaN where its row is empty), rendered in `representation`'s
+// reference_representation with reference_seed. With a cache, a reference another scene of the
+// same key rendered is taken from it (rendered_pixels 0, reused_pixels all), else rendered and
+// stored (rendered_pixels all).
+std::vector<float> defect_free_reference(const Scene& scene, Representation representation, const RenderOptions& options,
+                                         long* rendered_pixels = nullptr, ReferenceCache* cache = nullptr,
+                                         long* reused_pixels = nullptr);
 
 // The representation the reference is rendered in: the object without defects needs no mesh, so
 // Analytic, except that a mesh-only render keeps its own (its facets are what it measures).

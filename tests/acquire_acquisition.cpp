@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <regex>
+#include <string>
 #include <vector>
 
 #include "acquire/Acquisition.h"
@@ -142,6 +144,67 @@ TEST(Acquisition, BruteForceUnderNoiseFindsFewFalseEntries) {
     }
     EXPECT_LE(false_entries, tol::kBruteForceFalseEntries400Rows);
     EXPECT_EQ(missed, 0);  // 0.5 of the light is 2600 electrons, hundreds of sigma
+}
+
+// The bright field beside every acquisition is the reference a CNR is judged against: the same
+// image for every method and K (its noise streams are kBrightFieldPattern's), so a defect's
+// bright-field CNR does not move with the method the acquisition happens to use.
+TEST(Acquisition, TheBrightFieldReferenceIsTheSameImageForEveryMethod) {
+    const CsrMatrix T = random_T();
+    SensorModel s;
+    std::vector<float> first;
+    struct Run { Method m; int K; };
+    for (const Run run : {Run{Method::Fields, 2}, Run{Method::Gray, 2 * (5 + 4)}, Run{Method::Gray, 2 * (5 + 4) + 6},
+                          Run{Method::Stripes, kP + kQ}, Run{Method::Stripes, 4}}) {
+        AcquireOptions o;
+        o.method = run.m;
+        o.patterns = run.K;
+        o.dark_block = 6;
+        const AcquireResult r = run_acquisition(T, kRows, 1, kDisplay, o, s);
+        const std::vector<float>& bf = r.bright.channel("BrightField");
+        if (first.empty()) first = bf;
+        EXPECT_EQ(bf, first) << method_name(run.m) << " K = " << run.K;
+    }
+    // Another noise seed, another image.
+    s.seed = 2;
+    AcquireOptions o;
+    o.method = Method::Fields;
+    o.patterns = 2;
+    o.dark_block = 6;
+    EXPECT_NE(run_acquisition(T, kRows, 1, kDisplay, o, s).bright.channel("BrightField"), first);
+}
+
+// check_patterns suggests the counts nearest a K that stripes cannot show, each with the stripe
+// width that count is shown with (stripe_width_for's, what run_acquisition uses). On 500 x 500, 7
+// lies between 6 (w = 167) and 8, which 4 + 4 stripes of 125 pixels show (widths 125 to 166 all
+// give 8 patterns; 8 patterns mean 125).
+TEST(Acquisition, StripeSuggestionsNameTheWidthsTheirCountsUse) {
+    AcquireOptions o;
+    o.method = Method::Stripes;
+    o.patterns = 7;
+    const std::string m = check_patterns(o, 500, 500);
+    EXPECT_NE(m.find("the nearest are 6 (w = 167) and 8 (w = 125)"), std::string::npos) << m;
+    EXPECT_EQ(stripe_width_for(8, 500, 500), 125);
+    // Every suggestion on a few displays: each count is one stripes shows, with that width.
+    const std::regex nearest(R"(the nearest are (\d+) \(w = (\d+)\) and (\d+) \(w = (\d+)\))");
+    for (const auto& [P, Q] : {std::pair{500, 500}, std::pair{12, 20}, std::pair{37, 91}}) {
+        int suggestions = 0;
+        for (int K = 1; K <= P + Q; ++K) {
+            o.patterns = K;
+            const std::string msg = check_patterns(o, P, Q);
+            if (msg.empty()) continue;
+            std::smatch g;
+            ASSERT_TRUE(std::regex_search(msg, g, nearest)) << msg;
+            for (int i : {1, 3}) {
+                const int count = std::stoi(g[i].str()), w = std::stoi(g[i + 1].str());
+                EXPECT_EQ(stripe_width_for(count, P, Q), w) << P << " x " << Q << ", K = " << K << ": " << msg;
+                o.patterns = count;
+                EXPECT_EQ(check_patterns(o, P, Q), "") << count;
+            }
+            ++suggestions;
+        }
+        EXPECT_GT(suggestions, 0);
+    }
 }
 
 }  // namespace

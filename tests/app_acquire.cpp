@@ -60,7 +60,8 @@ TEST_F(AcquireCommand, ResultsDoNotDependOnTheThreadCount) {
 TEST_F(AcquireCommand, ContrastIsMeasuredInTheGivenRegions) {
     // A hand-made regions.json (as `ltmsim experiment` writes): the 4 centre pixels and a ring.
     std::ofstream(dir / "r" / "regions.json")
-        << R"({"defects": [{"defect": 0, "radius_mm": 0.6, "defect_pixels": [87, 88, 103, 104],)"
+        << R"({"defects": [{"defect": 0, "kind": "bubble", "size": {"semi_axis_a_mm": 0.6, "semi_axis_b_mm": 0.6,)"
+        << R"( "semi_axis_c_mm": 0.6}, "defect_pixels": [87, 88, 103, 104],)"
         << R"( "surround_pixels": [53, 54, 55, 56, 57, 58, 69, 74, 133, 138, 149, 150, 151, 152, 153, 154]}]})";
     std::string err;
     ASSERT_EQ(run("acquire " + r() + " --method stripes --patterns 90", &err), 0) << err;
@@ -72,6 +73,46 @@ TEST_F(AcquireCommand, ContrastIsMeasuredInTheGivenRegions) {
         EXPECT_TRUE(d[0]["bright_field"].contains(kind)) << kind;
     }
     EXPECT_EQ(rep["visible"].size(), 1u);
+    EXPECT_EQ(d[0]["kind"], "bubble");
+    EXPECT_EQ(d[0]["label"], "bubble r = 0.6 mm");
+}
+
+// The summary says what its numbers are: one line per K naming the error measure, and with
+// regions each defect's CNR under the sensor in the method's main channel beside the bright field.
+TEST_F(AcquireCommand, TheSummaryLabelsItsNumbers) {
+    std::ofstream(dir / "r" / "regions.json")
+        << R"({"defects": [{"defect": 0, "kind": "bubble", "size": {"semi_axis_a_mm": 0.6, "semi_axis_b_mm": 0.6,)"
+        << R"( "semi_axis_c_mm": 0.6}, "defect_pixels": [87, 88, 103, 104],)"
+        << R"( "surround_pixels": [53, 54, 55, 56, 57, 58, 69, 74, 133, 138, 149, 150, 151, 152, 153, 154]}]})";
+    const ltm::test::Outcome o = ltm::test::ltmsim("acquire " + r() + " --method stripes --patterns 18 90", dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    const auto lines = o.lines();
+    ASSERT_EQ(lines.size(), 4u) << o.out;
+    for (int i : {0, 2}) {
+        EXPECT_EQ(lines[static_cast<std::size_t>(i)].rfind(std::string("K = ") + (i == 0 ? "18" : "90") +
+                                                               " (stripes): relative RMS error against the exact features of T: ",
+                                                           0),
+                  0u)
+            << lines[static_cast<std::size_t>(i)];
+        EXPECT_NE(lines[static_cast<std::size_t>(i)].find("ScatterRows "), std::string::npos);
+    }
+    for (int i : {1, 3}) {
+        EXPECT_EQ(lines[static_cast<std::size_t>(i)].rfind("  defect 0 (bubble r = 0.6 mm): CNR under the sensor: ScatterRows ", 0), 0u)
+            << lines[static_cast<std::size_t>(i)];
+        EXPECT_NE(lines[static_cast<std::size_t>(i)].find(", bright field "), std::string::npos);
+    }
+}
+
+// A scene file where a render folder belongs: the advice is to render it first, not to write
+// into the scene file's name.
+TEST_F(AcquireCommand, ASceneFileIsToldToBeRenderedFirst) {
+    std::string err;
+    EXPECT_EQ(run("acquire " + path("scene.yaml") + " --patterns 24", &err), 2);
+    EXPECT_NE(err.find(path("scene.yaml") + " is a file, not a render folder"), std::string::npos) << err;
+    EXPECT_NE(err.find("ltmsim render " + path("scene.yaml") + " -o DIR"), std::string::npos) << err;
+    EXPECT_EQ(err.find("-o " + path("scene.yaml")), std::string::npos) << err;
+    EXPECT_EQ(run("acquire " + path("nothing-here") + " --patterns 24", &err), 2);
+    EXPECT_NE(err.find("no such folder"), std::string::npos) << err;
 }
 
 TEST_F(AcquireCommand, BadInputExitsTwoWithALocatedMessageAndWritesNothing) {

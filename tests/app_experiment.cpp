@@ -4,6 +4,7 @@
 // variants must remove sampling-noise false positives in the defect-free scene.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -63,17 +64,30 @@ TEST(PaperExperiment, ScatterFeaturesBeatTheBrightFieldOnTheSmallestBubbles) {
 
     std::ifstream in(out / "contrast.csv");
     std::string line;
-    std::getline(in, line);  // header
+    std::getline(in, line);
+    const auto header = split(line, ',');
+    auto column = [&](const std::string& name) {
+        const auto it = std::find(header.begin(), header.end(), name);
+        EXPECT_NE(it, header.end()) << name;
+        return static_cast<std::size_t>(it - header.begin());
+    };
+    const std::size_t c_scene = column("scene"), c_defect = column("defect"), c_channel = column("channel"),
+                      c_cnr = column("cnr"), c_measured = column("measured_cnr");
     std::map<std::string, std::map<int, double>> small;  // channel -> defect -> CNR (r = 0.5 scene)
-    std::map<std::string, int> false_positives;
     while (std::getline(in, line)) {
         const auto f = split(line, ',');
-        ASSERT_GE(f.size(), 10u) << line;
-        if (f[9].rfind("false_positives=", 0) == 0) {
-            false_positives[f[3]] = std::stoi(f[9].substr(16));
-            continue;
-        }
-        if (f[0] == "bubbles-r0.5") small[f[3]][std::stoi(f[1])] = std::stod(f[7]);
+        ASSERT_GT(f.size(), c_measured) << line;
+        // No CNR is infinite or missing, rendered or measured.
+        for (std::size_t c : {c_cnr, c_measured}) EXPECT_TRUE(std::isfinite(std::stod(f[c]))) << line;
+        if (f[c_scene] == "bubbles-r0.5") small[f[c_channel]][std::stoi(f[c_defect])] = std::stod(f[c_cnr]);
+    }
+    std::map<std::string, int> false_positives;
+    std::ifstream fp(out / "false_positives.csv");
+    std::getline(fp, line);
+    while (std::getline(fp, line)) {
+        const auto f = split(line, ',');
+        ASSERT_GE(f.size(), 3u) << line;
+        false_positives[f[1]] = std::stoi(f[2]);
     }
     ASSERT_EQ(small["BrightField"].size(), 3u);
     for (int k = 0; k < 3; ++k) {
@@ -86,4 +100,77 @@ TEST(PaperExperiment, ScatterFeaturesBeatTheBrightFieldOnTheSmallestBubbles) {
     EXPECT_LT(false_positives["RobustScatterDiameter"], false_positives["ScatterDiameter"] / 10);
     EXPECT_LE(false_positives["RobustScatterCount"], false_positives["ScatterCount"]);
     fs::remove_all(work);
+}
+
+namespace {
+
+// A small experiment (a 4 mm window, 24 x 24 camera, 60 x 60 display, 16 samples per pixel):
+// seconds, where the paper's takes minutes.
+class SmallExperiment : public ltm::test::TempDirTest {
+protected:
+    void SetUp() override {
+        TempDirTest::SetUp();
+        const std::string common =
+            "camera: {resolution: [24, 24], size: [12.0, 12.0], numerical_aperture: 0.02, samples_per_pixel: 16}\n"
+            "display: {resolution: [60, 60], size: [30.0, 30.0], z: 30.0}\nseed: 3\n"
+            "object: {type: window, thickness: 4.0, diameter: 20.0, ior: 1.5}\n";
+        write("free.yaml", common + "defects: []\n");
+        write("bubble.yaml", common + "defects:\n  - {type: bubble, center: [-2.0, 1.0, 0.0], radius: 0.8}\n");
+    }
+    void experiment(const std::string& extra) {
+        write("experiment.yaml", "scenes:\n  - {file: free.yaml, label: free}\n  - {file: bubble.yaml, label: bubble}\n"
+                                 "reference: free.yaml\nmontage: [BrightField, ScatterCount]\n" +
+                                     extra);
+    }
+};
+
+}  // namespace
+
+// Every CNR of contrast.csv and contrast.md is a finite number, rendered and measured, the
+// measured images come from the documented instrument, and a defect-free scene's render folder
+// has its reference too.
+TEST_F(SmallExperiment, EveryCnrIsFiniteRenderedAndMeasured) {
+    experiment("candidates: [Deflection, DarkField, ScatterDiameter]\n");
+    const ltm::test::Outcome o = ltm::test::ltmsim("experiment " + dir.string() + " -o " + path("out") + " --threads 2", dir);
+    ASSERT_EQ(o.status, 0) << o.err;
+    for (const char* f : {"contrast.csv", "false_positives.csv", "contrast.md", "montage.png", "free/reference.exr",
+                          "bubble/reference.exr", "bubble/regions.json"})
+        EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+    std::ifstream in(dir / "out" / "contrast.csv");
+    std::string line;
+    std::getline(in, line);
+    const auto header = split(line, ',');
+    int rows = 0;
+    while (std::getline(in, line)) {
+        const auto f = split(line, ',');
+        ASSERT_EQ(f.size(), header.size()) << line;
+        for (std::size_t i = 0; i < header.size(); ++i) {
+            if (header[i] == "cnr" || header[i] == "measured_cnr") EXPECT_TRUE(std::isfinite(std::stod(f[i]))) << line;
+            if (header[i] == "measured_by") EXPECT_FALSE(f[i].empty()) << line;
+        }
+        ++rows;
+    }
+    EXPECT_EQ(rows, 17);  // one bubble, every channel
+    const std::string md = ltm::test::slurp(dir / "out" / "contrast.md");
+    EXPECT_EQ(md.find("inf"), std::string::npos) << md;
+    EXPECT_EQ(md.find("****"), std::string::npos) << md;
+    EXPECT_NE(md.find("Best new feature measured under the sensor model: **"), std::string::npos) << md;
+    // The instrument of acquire/Instrument.h on a 60 x 60 display: Gray code and three phase steps
+    // per axis for the deflection map, 2 (6 + 6) + 6 = 30 patterns; the fields for the dark field;
+    // line scans, 60 + 60; compressive sensing, 8 + 8 stripes of 8 pixels and 1024 random patterns.
+    EXPECT_NE(md.find("| Deflection | gray (K = 30) |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| DarkField | fields (K = 2) |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| ScatterRows | stripes (K = 120) |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| ScatterDiameter | compressive (K = 1040) |"), std::string::npos) << md;
+}
+
+// A channel that is no feature is a located error before anything is rendered.
+TEST_F(SmallExperiment, AnUnknownChannelIsALocatedError) {
+    experiment("candidates: [ScatterDiameter, ScatterCont]\n");
+    const ltm::test::Outcome o = ltm::test::ltmsim("experiment " + dir.string() + " -o " + path("out"), dir);
+    EXPECT_EQ(o.status, 2);
+    EXPECT_NE(o.err.find(path("experiment.yaml") + ":6:31: candidates[1]: unknown feature channel 'ScatterCont'"),
+              std::string::npos)
+        << o.err;
+    EXPECT_FALSE(fs::exists(dir / "out"));
 }

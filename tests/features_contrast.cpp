@@ -131,10 +131,55 @@ TEST(ContrastToNoise, NoiseFreeSurround) {
     EXPECT_EQ(ltm::contrast_to_noise(img, Region{{5, 6}}, surround).surround_std, 0.0);
 }
 
+TEST(ContrastToNoise, ASurroundNeverShowsLessNoiseThanItsResolution) {
+    // The dark field of a bubble whose surround all lands on the dark block: exactly 0 in every
+    // surround pixel of a render with S = 256 samples per pixel, 0.05 in the defect. One sample is
+    // 1/256 of a pixel's light, the step the image resolves: the noise is taken as
+    // (1/256) / sqrt 12 = 0.0011276, not 0, and the CNR is 0.05 / 0.0011276 = 44.34, not inf.
+    const std::vector<float> img = {0, 0, 0, 0, 0.05f, 0.05f};
+    const Region surround{{0, 1, 2, 3}}, defect{{4, 5}};
+    const double q = 1.0 / 256;
+    const ltm::ContrastResult r = ltm::contrast_to_noise(img, defect, surround, q);
+    EXPECT_EQ(r.surround_std, 0.0);
+    EXPECT_EQ(r.noise, q / std::sqrt(12.0));
+    EXPECT_NEAR(r.cnr, static_cast<double>(0.05f) / (q / std::sqrt(12.0)), ltm::tol::contrast_exact() * 44.34);
+    EXPECT_TRUE(std::isfinite(r.cnr));
+    // A surround noisier than its resolution keeps its own standard deviation (SmallImageByHand's).
+    const std::vector<float> noisy = {1, 2, 3, 4, 10, 10.5f};
+    const ltm::ContrastResult n = ltm::contrast_to_noise(noisy, defect, surround, 1.0);
+    EXPECT_EQ(n.noise, n.surround_std);
+    EXPECT_EQ(n.cnr, ltm::contrast_to_noise(noisy, defect, surround).cnr);
+    EXPECT_THROW(ltm::contrast_to_noise(img, defect, surround, -1.0), std::invalid_argument);
+    EXPECT_THROW(ltm::contrast_to_noise(img, defect, surround, std::numeric_limits<double>::infinity()),
+                 std::invalid_argument);
+}
+
+TEST(ContrastToNoise, ResolutionByTheChannelsUnit) {
+    ltm::Resolution q;
+    q.fraction = 1.0 / 256;
+    q.mm = 0.2 / 256;
+    q.display_pixels = 8;
+    q.moment = 1.0 / 256;
+    EXPECT_EQ(q.of("BrightField"), 1.0 / 256);
+    EXPECT_EQ(q.of("DarkField"), 1.0 / 256);
+    EXPECT_EQ(q.of("Deflection"), 0.2 / 256);
+    EXPECT_EQ(q.of("MeanY"), 0.2 / 256);
+    EXPECT_EQ(q.of("ScatterRows"), 8.0);
+    EXPECT_EQ(q.of("ScatterDiameter"), 8.0);
+    EXPECT_EQ(q.of("EllipseMinor"), 1.0 / 256);
+    EXPECT_EQ(q.of("EllipseMajor"), 1.0 / 256);
+    EXPECT_EQ(q.of("ScatterCount"), 1.0);
+    EXPECT_EQ(q.of("ScatterWidth"), 1.0);
+    EXPECT_EQ(q.of("EllipseAngle"), 1.0);
+    EXPECT_EQ(q.of("NoSuchChannel"), 0.0);
+}
+
 TEST(ContrastToNoise, TooFewFinitePixelsOrBadIndices) {
     const std::vector<float> img = {1, 2, 3, kNaNf, std::numeric_limits<float>::infinity()};
-    EXPECT_THROW(ltm::contrast_to_noise(img, Region{{0}}, Region{{1, 2}}), std::invalid_argument);
-    EXPECT_THROW(ltm::contrast_to_noise(img, Region{{0, 3, 4}}, Region{{1, 2}}), std::invalid_argument);
+    // One defect pixel is enough for its mean; the surround's spread needs two.
+    EXPECT_NO_THROW(ltm::contrast_to_noise(img, Region{{0}}, Region{{1, 2}}));
+    EXPECT_EQ(ltm::contrast_to_noise(img, Region{{0}}, Region{{1, 2}}).defect_pixels, 1);
+    EXPECT_THROW(ltm::contrast_to_noise(img, Region{{3, 4}}, Region{{1, 2}}), std::invalid_argument);
     EXPECT_THROW(ltm::contrast_to_noise(img, Region{{0, 1}}, Region{{2, 3}}), std::invalid_argument);
     EXPECT_THROW(ltm::contrast_to_noise(img, Region{{0, 1}}, Region{}), std::invalid_argument);
     EXPECT_THROW(ltm::contrast_to_noise(img, Region{{0, 5}}, Region{{1, 2}}), std::invalid_argument);

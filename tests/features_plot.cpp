@@ -454,6 +454,46 @@ TEST(PseudoColour, CellsAreExactlyTheViridisColourOfTheirValue) {
     }
 }
 
+// A montage marks each defect with a ring (study/Experiment.h): drawn over the data cells only,
+// white within 1 output pixel of the circle, black between 1 and 2, the cells elsewhere untouched.
+TEST(PseudoColour, RingsMarkSpotsOverTheCells) {
+    const int w = 20, h = 16, s = 3;
+    const std::vector<float> v = ramp(w, h);
+    // A ring around data pixel (m, n) = (5, 7), radius 2 data pixels (6 output pixels), and one
+    // reaching past the image's left edge (clipped: the frame and the axes stay as they are).
+    const std::vector<ltm::Ring> rings = {{7.5, 5.5, 2.0}, {0.5, 12.5, 3.0}};
+    const ltm::ImageExtent fov{20, 16};
+    const Image plain = ltm::pseudo_colour(v, w, h, "", kNaN, kNaN, s, fov);
+    const Image marked = ltm::pseudo_colour(v, w, h, "", kNaN, kNaN, s, fov, rings);
+    const auto L = ltm::pseudo_colour_layout(v, w, h, "", kNaN, kNaN, s, fov);
+    ASSERT_EQ(marked.width, plain.width);
+    ASSERT_EQ(marked.height, plain.height);
+    int white = 0, black = 0;
+    for (int r = 0; r < plain.height; ++r)
+        for (int c = 0; c < plain.width; ++c) {
+            const bool inside = r >= L.image_y && r < L.image_y + L.image_h && c >= L.image_x && c < L.image_x + L.image_w;
+            double off = 1e9;
+            for (const ltm::Ring& g : rings)
+                off = std::min(off, std::fabs(std::hypot(c + 0.5 - (L.image_x + g.x * s), r + 0.5 - (L.image_y + g.y * s)) -
+                                              g.radius * s));
+            if (inside && off <= 1.0) {
+                EXPECT_EQ(pixel(marked, r, c), ltm::kWhite) << r << " " << c;
+                ++white;
+            } else if (inside && off <= 2.0) {
+                EXPECT_EQ(pixel(marked, r, c), ltm::kBlack) << r << " " << c;
+                ++black;
+            } else {
+                EXPECT_EQ(pixel(marked, r, c), pixel(plain, r, c)) << r << " " << c;
+            }
+        }
+    // The first ring is whole: a circle of radius 6 output pixels, 2 wide in white and 2 in black
+    // (about 2 pi 6 x 2 and 2 pi (6 +- 1.5) x 1 pixels).
+    EXPECT_GT(white, 60);
+    EXPECT_GT(black, 60);
+    // The marked spot itself (the cell block of (5, 7)) keeps its colour.
+    EXPECT_EQ(pixel(marked, L.image_y + 5 * s + 1, L.image_x + 7 * s + 1), pixel(plain, L.image_y + 5 * s + 1, L.image_x + 7 * s + 1));
+}
+
 TEST(PseudoColour, BarIsMonotoneFromHiOnTopToLoAtTheBottom) {
     const Image img = ltm::pseudo_colour(ramp(20, 30), 20, 30, "T", -2.0, 3.0, 4);
     const auto L = ltm::pseudo_colour_layout(ramp(20, 30), 20, 30, "T", -2.0, 3.0, 4);
