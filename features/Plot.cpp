@@ -356,7 +356,7 @@ void rgb_codes(const std::uint32_t* row, int n, std::uint8_t* out) {
 
 // The same conversion for the PNG rows of a preview, 4 pixels a step with SSSE3's byte shuffle
 // where the processor has it (every x86-64 processor since 2006; the scalar rgb_codes otherwise
-// and for the last pixels). It was a fifth of a preview's time one byte at a time (perf,
+// and for the last pixels): one byte at a time it takes a fifth of a preview's time (perf,
 // bench_features' BM_WriteFile/file:4). Each step loads 16 bytes (4 words) and stores 16, of
 // which the last 4 are the next step's: the loop stops while 6 pixels are left, so that no store
 // passes the row's 3n bytes. tests/features_plot.cpp compares the PNG's pixels with

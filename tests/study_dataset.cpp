@@ -512,14 +512,10 @@ defects:
 max_attempts: 100
 )",
                                              "spec.yaml");
-    try {
-        draw_sample(s, 0);
-        FAIL() << "no error";
-    } catch (const InputError& e) {
-        EXPECT_EQ(e.line, 5);
-        EXPECT_EQ(e.key_path, "defects[0]");
-        EXPECT_NE(std::string(e.what()).find("(radius 200 mm) holds the whole object"), std::string::npos) << e.what();
-    }
+    const InputError e = draw_error(s, 0);
+    EXPECT_EQ(e.line, 5);
+    EXPECT_EQ(e.key_path, "defects[0].radius");
+    EXPECT_NE(std::string(e.what()).find("(radius 200 mm) holds the whole object"), std::string::npos) << e.what();
 }
 
 // ---- COCO RLE ----
