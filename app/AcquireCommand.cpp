@@ -15,6 +15,7 @@
 #include <iostream>
 
 #include "acquire/Acquisition.h"
+#include "acquire/Instrument.h"
 #include "app/Commands.h"
 #include "app/FeatureOutputs.h"
 #include "app/SceneSetup.h"
@@ -35,10 +36,6 @@ using io::Json;
 using io::json_number;
 
 namespace {
-
-// CNR >= this counts as visible (the Rose criterion: A. Rose, "Vision: Human and Electronic",
-// 1973, a contrast of 5 standard deviations for certain detection); docs/acquisition.md's table.
-constexpr double kVisibleCnr = 5.0;
 
 struct AcquireArgs {
     std::string dir, out, method = "gray", sensor, family = "bernoulli";
@@ -97,8 +94,9 @@ Json channel_error(const std::vector<float>& est, const std::vector<float>& exac
 }
 
 // The three CNRs of one defect in one channel (docs/acquisition.md, "Which noise"):
-//   exact     the exact-T feature's CNR: today's contrast table, whose noise is the simulator's
-//             Monte Carlo noise (the random Fresnel choices), which a real camera does not have;
+//   exact     the exact-T feature's CNR: the contrast table's rendered number, whose noise is the
+//             simulator's Monte Carlo noise (the random Fresnel choices), which a real camera
+//             does not have;
 //   acquired  the estimated feature's CNR with its own surround spread: the sensor's noise, the
 //             surround's real structure, and only the Monte Carlo variation the sensor can see
 //             (entries below the detection threshold, the single far-off paths, are not
@@ -108,34 +106,30 @@ Json channel_error(const std::vector<float>& est, const std::vector<float>& exac
 //             an independent noise seed (same T, same patterns: everything but the sensor's noise
 //             cancels). An upper bound: it leaves out the surround's structure, so a decoder whose
 //             output the noise never changes (Gray code alone, counts far above the noise) gets
-//             an infinite value whatever its contrast.
+//             the resolution's noise floor whatever its contrast.
+// Each is measure_cnr's (study/Experiment.h, the contrast table's), its noise never below the
+// image's q / sqrt 12: q_exact that of the rendered image, q that of the measured one. The
+// sensor's noise has the same floor: two independent rounding errors of step q differ by
+// q / sqrt 6, which over sqrt 2 is q / sqrt 12 again.
 struct Cnrs {
     double exact = NAN, acquired = NAN, sensor = NAN;
 };
 
-// A region left with fewer than 2 finite pixels (a decoder's NaN rows: no light, or too spread to
-// recover) has no CNR.
-bool finite_enough(const std::vector<float>& img, const Region& r) {
-    int n = 0;
-    for (int k : r.pixels) n += std::isfinite(img[static_cast<std::size_t>(k)]) ? 1 : 0;
-    return n >= 2;
-}
-
 Cnrs cnrs(const std::vector<float>& est, const std::vector<float>& repeat, const std::vector<float>& exact,
-          const DefectRegions& g) {
+          const DefectRegions& g, double q_exact, double q) {
     Cnrs c;
-    if (g.defect_pixels.pixels.size() < 2 || g.surround.pixels.size() < 2) return c;  // not seen at this resolution
-    if (finite_enough(exact, g.defect_pixels) && finite_enough(exact, g.surround))
-        c.exact = contrast_to_noise(exact, g.defect_pixels, g.surround).cnr;
-    if (!finite_enough(est, g.defect_pixels) || !finite_enough(est, g.surround)) return c;
-    const ContrastResult a = contrast_to_noise(est, g.defect_pixels, g.surround);
+    c.exact = measure_cnr(exact, g, q_exact).cnr;
+    const ContrastResult a = measure_cnr(est, g, q);
     c.acquired = a.cnr;
+    if (std::isnan(a.defect_mean)) {
+        c.sensor = a.cnr;  // not imaged (0) or not measured (NaN)
+        return c;
+    }
     std::vector<float> diff(est.size());
     for (std::size_t k = 0; k < est.size(); ++k) diff[k] = static_cast<float>((est[k] - repeat[k]) / std::sqrt(2.0));
     // Only the surround's spread is wanted (the defect region may hold NaN rows of the repeat).
-    const double noise = finite_enough(diff, g.surround) ? contrast_to_noise(diff, g.surround, g.surround).surround_std : NAN;
-    const double contrast = std::fabs(a.defect_mean - a.surround_mean);
-    c.sensor = noise > 0 ? contrast / noise : (noise == 0 ? (contrast > 0 ? INFINITY : 0.0) : NAN);
+    const double noise = measure_cnr(diff, {g.defect, g.kind, g.size, g.surround, g.surround}, q).noise;
+    c.sensor = std::isnan(noise) ? NAN : std::fabs(a.defect_mean - a.surround_mean) / noise;
     return c;
 }
 
@@ -235,10 +229,17 @@ int run(const AcquireArgs& a) {
         for (const auto& [name, v] : f.channels)
             if (exact.has(name)) errors[name] = channel_error(v, exact.channel(name));
         Json defects = Json::array();
+        // The images' resolutions: the rendered one's from the samples per pixel (none where
+        // run.json does not give them), the measured one's from the sensor and the method.
+        const Resolution rendered = g.samples_per_pixel > 0 ? rendered_resolution(g.samples_per_pixel, g.display) : Resolution{};
+        auto q_exact = [&](const std::string& name) { return g.samples_per_pixel > 0 ? rendered.of(name) : 0.0; };
+        auto q = [&](const std::string& name) { return acquire::measured_resolution(name, o, sensor, g.display); };
         for (const DefectRegions& d : regions) {
             Json ch = Json::object();
             for (const auto& [name, v] : f.channels)
-                if (exact.has(name)) ch[name] = cnr_json(cnrs(v, kr.repeat.features.channel(name), exact.channel(name), d));
+                if (exact.has(name))
+                    ch[name] = cnr_json(
+                        cnrs(v, kr.repeat.features.channel(name), exact.channel(name), d, q_exact(name), q(name)));
             defects.push_back({{"defect", d.defect},
                                {"kind", d.kind},
                                {"label", d.describe()},
@@ -246,7 +247,8 @@ int run(const AcquireArgs& a) {
                                {"channels", ch},
                                {"bright_field", cnr_json(cnrs(kr.r.bright.channel("BrightField"),
                                                               kr.repeat.bright.channel("BrightField"),
-                                                              exact.channel("BrightField"), d))}});
+                                                              exact.channel("BrightField"), d, q_exact("BrightField"),
+                                                              q("BrightField")))}});
         }
         kr.report = {{"patterns", K},
                      {"shown", kr.r.summary},

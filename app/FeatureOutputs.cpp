@@ -156,7 +156,8 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
                 write_feature_images(dir, run.features, {scene.camera.size[0], scene.camera.size[1]}, previews,
                                      &group);
             });
-        written = {d / "ltm.npz", d / "features.exr", d / "features.npz", d / "reference.exr"};
+        for (const char* f : render_folder_files())
+            if (std::string(f) != "run.json") written.push_back(d / f);
         group.commit();
         t_write.done(dir);
         write_run_json(dir, scene, r, run.representation, threads,
@@ -168,9 +169,14 @@ void write_render_folder(const std::string& dir, const Scene& scene, const Scene
     }
 }
 
+std::vector<const char*> render_folder_files() {
+    return {"ltm.npz", "features.exr", "features.npz", "reference.exr", "run.json"};
+}
+
 RenderGeometry render_geometry(const Scene& s) {
     return {s.camera.resolution[0], s.camera.resolution[1], {s.camera.size[0], s.camera.size[1]},
-            {s.display.resolution[0], s.display.resolution[1], s.display.size[0], s.display.size[1]}};
+            {s.display.resolution[0], s.display.resolution[1], s.display.size[0], s.display.size[1]},
+            s.camera.samples_per_pixel};
 }
 
 RenderGeometry read_render_geometry(const std::string& dir) {
@@ -188,6 +194,10 @@ RenderGeometry read_render_geometry(const std::string& dir) {
     g.display.P = static_cast<int>(display[1]);
     g.display.width = size[0];
     g.display.height = size[1];
+    // The samples per pixel give the rendered images' resolution (acquire's exact CNRs).
+    const io::Json& camera_json = root["scene"]["camera"];
+    if (camera_json.contains("samples_per_pixel") && camera_json["samples_per_pixel"].is_number_integer())
+        g.samples_per_pixel = camera_json["samples_per_pixel"].get<int>();
     // The camera's field of view only labels the previews' axes: without it they have none.
     try {
         const auto fov = numbers_at(root, {"scene", "camera", "size"}, 2, file);

@@ -22,9 +22,13 @@ struct RenderGeometry {
     int camera_columns = 0, camera_rows = 0;
     ImageExtent camera;  // the camera's field of view (scene.camera.size), for the previews' axes
     DisplayGrid display;
+    int samples_per_pixel = 0;  // scene.camera.samples_per_pixel; 0 where run.json does not say
 };
 
 RenderGeometry render_geometry(const Scene& scene);
+
+// The files write_render_folder writes into its folder (beside the previews' folder features/).
+std::vector<const char*> render_folder_files();
 
 // DIR/run.json: the resolved scene, seed, version, representation, estimator ({"estimator":
 // "split", "split_depth": 4} or {"estimator": "sample"}), timings and path statistics;

@@ -33,6 +33,11 @@ Region annulus_region(int width, int height, double cx, double cy, double r_in, 
 // The pixels of a that are not in b, in a's order.
 Region subtract(const Region& a, const Region& b);
 
+// CNR >= this shows a defect: the Rose criterion, a contrast of 5 standard deviations for certain
+// detection (A. Rose, "Vision: Human and Electronic", 1973). The experiment's best new feature and
+// acquire's `visible` both use it.
+constexpr double kVisibleCnr = 5.0;
+
 struct ContrastResult {
     double defect_mean = 0, surround_mean = 0, surround_std = 0, cnr = 0;
     double noise = 0;  // what the contrast is divided by: max(surround_std, resolution / sqrt 12)

@@ -181,7 +181,7 @@ double segment_distance(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Ve
 }
 
 // A scratch's centre line on the face (profile point (0, 0) along its path), as a polyline of
-// points at most a tenth of a camera pixel apart (at most 513 of them).
+// n + 1 points, n = path length / (a tenth of a camera pixel) clamped to [8, 512].
 std::vector<Vec3> scratch_centre_line(const Scene& scene, const Defect& d, double pitch) {
     const ScratchPath path = scratch_path(Lens(scene.object.lens), d);
     const int n = static_cast<int>(std::clamp(std::ceil(path.path_length() / (0.1 * pitch)), 8.0, 512.0));
@@ -210,6 +210,9 @@ Region surround_shell(const Tracer& free, const Scene& scene, const Defect& d) {
     const bool scratch = d.type == DefectType::Scratch;
     const double r = scratch ? std::min(0.5 * d.width, d.depth) : std::min({d.semi_axes.x, d.semi_axes.y, d.semi_axes.z});
     const double inner = 2 * r + 2 * pitch, outer = 5 * r + 4 * pitch;
+    // A scratch's cross-section lies within its width x depth box below the centre line, so
+    // within hypot(w / 2, depth) of it: the tube the shell lies beyond.
+    const double tube = scratch ? std::hypot(0.5 * d.width, d.depth) : 0.0;
     const std::vector<Vec3> line = scratch ? scratch_centre_line(scene, d, pitch) : std::vector<Vec3>{};
     Region reg;
     for (long k = 0; k < free.camera().pixels(); ++k) {
@@ -219,9 +222,9 @@ Region surround_shell(const Tracer& free, const Scene& scene, const Defect& d) {
         const PrincipalPath p = free.principal_path(start, {0, 0, 1});
         bool in_shell;
         if (scratch) {
-            // Beyond the tube of radius r around the centre line by inner .. outer.
+            // Beyond the tube around the centre line by inner .. outer.
             const double dist = min_distance_along(p, start, line);
-            in_shell = dist <= r + outer && dist > r + inner;
+            in_shell = dist <= tube + outer && dist > tube + inner;
         } else {
             in_shell = min_rho2_along(p, start, d, outer) <= 1.0 && min_rho2_along(p, start, d, inner) > 1.0;
         }
@@ -338,25 +341,29 @@ std::vector<DefectRegions> read_regions_json(const std::string& path, long pixel
     return out;
 }
 
-Resolution rendered_resolution(const Scene& scene) {
+Resolution rendered_resolution(int samples_per_pixel, const DisplayGrid& display) {
     // One sample of S carries 1 / S of a pixel's light, and moving it by one display pixel moves
     // the pixel's energy-weighted moments (mean position, ellipse widths) by 1 / S of a pitch.
-    const double S = scene.camera.samples_per_pixel;
+    const double S = samples_per_pixel;
     Resolution q;
     q.fraction = 1.0 / S;
-    q.mm = std::min(scene.display.size[0] / scene.display.resolution[0], scene.display.size[1] / scene.display.resolution[1]) / S;
+    q.mm = std::min(display.width / display.Q, display.height / display.P) / S;
     q.moment = 1.0 / S;
     return q;
 }
 
-namespace {
+Resolution rendered_resolution(const Scene& scene) {
+    return rendered_resolution(scene.camera.samples_per_pixel,
+                               {scene.display.resolution[0], scene.display.resolution[1], scene.display.size[0], scene.display.size[1]});
+}
 
-// One image's CNR of one defect: none (a NaN) only when the defect has no finite pixel in it, or
-// its surround fewer than 2 (a decoder's NaN rows). A defect with no traced pixel at all has no
-// image: its CNR is 0 (defect_pixels 0).
 ContrastResult measure_cnr(const std::vector<float>& image, const DefectRegions& g, double resolution) {
     ContrastResult c;
-    if (g.defect_pixels.pixels.empty()) return c;  // not imaged: no contrast
+    c.defect_mean = c.surround_mean = c.surround_std = c.noise = NAN;  // not measured
+    if (g.defect_pixels.pixels.empty()) {
+        c.cnr = 0;  // not imaged: no contrast
+        return c;
+    }
     int nd = 0, ns = 0;
     for (int k : g.defect_pixels.pixels) nd += std::isfinite(image[static_cast<std::size_t>(k)]) ? 1 : 0;
     for (int k : g.surround.pixels) ns += std::isfinite(image[static_cast<std::size_t>(k)]) ? 1 : 0;
@@ -367,6 +374,8 @@ ContrastResult measure_cnr(const std::vector<float>& image, const DefectRegions&
     return contrast_to_noise(image, g.defect_pixels, g.surround, resolution);
 }
 
+namespace {
+
 // The valid pixels of the false-positive count: within 0.95 of the clear aperture.
 Region aperture_pixels(const Scene& s) {
     Region valid;
@@ -376,7 +385,8 @@ Region aperture_pixels(const Scene& s) {
     return valid;
 }
 
-std::string cnr_text(double c) { return std::isnan(c) ? std::string("-") : fmt::format("{:.3g}", c); }
+// A CNR for the tables: '-' for none (NaN, or weakest_of's -1 for one that could not be measured).
+std::string cnr_text(double c) { return std::isnan(c) || c < 0 ? std::string("-") : fmt::format("{:.3g}", c); }
 
 // The numbers of one image kind (rendered or measured) over every scene and defect.
 struct ImageNumbers {
@@ -384,10 +394,6 @@ struct ImageNumbers {
     std::map<std::string, std::vector<double>> smallest_cnr;   // channel -> CNRs of the smallest defects
     std::map<std::string, int> false_pos;                      // channel -> in the reference scene
 };
-
-// CNR >= this shows a defect (the Rose criterion: A. Rose, "Vision: Human and Electronic", 1973;
-// the threshold `ltmsim acquire` calls visible).
-constexpr double kVisibleCnr = 5.0;
 
 // The weakest CNR of a list (one that could not be measured, NaN, counts as -1), NaN if empty.
 double weakest_of(const std::vector<double>& v) {
@@ -406,7 +412,8 @@ std::string best_candidate(const std::vector<std::string>& candidates, const Ima
     double best_cnr = -INFINITY;
     for (const auto& ch : candidates) {
         const auto it = n.smallest_cnr.find(ch);
-        if (it == n.smallest_cnr.end() || it->second.empty()) continue;
+        if (it == n.smallest_cnr.end() || std::none_of(it->second.begin(), it->second.end(), [](double c) { return !std::isnan(c); }))
+            continue;  // no CNR measured on the smallest defects
         const auto fp_it = n.false_pos.find(ch);
         const int fp = fp_it == n.false_pos.end() ? INT32_MAX - 1 : fp_it->second;
         const double weakest = weakest_of(it->second);
@@ -563,12 +570,13 @@ ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vect
         "CNR = |mean(defect) - mean(surround)| / noise, the noise the surround's standard deviation but never less than "
         "the image's resolution q / sqrt 12 (docs/features.md). Defect: the pixels at least {:g} of whose paths meet the "
         "defect first (traced); surround: the shell 2r + 2 px .. 5r + 4 px beyond the defect (its ellipsoid, r its "
-        "smallest semi-axis; a scratch's tube, r the smaller of its half-width and depth) along the defect-free object's "
+        "smallest semi-axis; a scratch's tube of radius hypot(w / 2, depth), r the smaller of w / 2 and depth) along the "
+        "defect-free object's "
         "centre rays, minus every pixel a path of which met a defect; both within 0.95 of the clear aperture. False "
         "positives: defect-free pixels within 0.95 of the aperture more than 5 x 1.4826 MAD from the median. Best new "
         "feature: among the candidates whose weakest CNR over the smallest defects is at least 5 (the Rose criterion), "
-        "the fewest false positives, then the largest weakest CNR; if none reaches 5, the largest weakest CNR. A '-' is a defect whose image has no finite pixel (or a surround with fewer than 2); a defect no "
-        "path met has no image and CNR 0.\n\n",
+        "the fewest false positives, then the largest weakest CNR; if none reaches 5, the largest weakest CNR. A '-' is a defect whose image has no finite pixel (or a surround with fewer than 2); a defect with "
+        "no traced pixel within 0.95 of the aperture has no image and CNR 0.\n\n",
         spec.defect_fraction);
     auto table = [&](const std::string& title, const ImageNumbers& n, const MeasuredImages* how) {
         md += "## " + title + "\n\n| image |" + (how ? std::string(" measured by |") : std::string());

@@ -18,8 +18,9 @@
 // at a lower threshold, since CNR wants every pixel the defect visibly changes). Its surround is
 // geometric: the camera pixels whose centre ray through the defect-free object passes between
 // 2 r + 2 px and 5 r + 4 px beyond the defect (px a pixel's width): beyond its ellipsoid, r its
-// smallest semi-axis, for a bubble, particle or inhomogeneity; beyond the tube of radius r around
-// a scratch's centre line, r the smaller of its half-width and depth. Every pixel any path of
+// smallest semi-axis, for a bubble, particle or inhomogeneity; beyond the tube of radius
+// hypot(w / 2, depth) around a scratch's centre line (it holds the scratch's cross-section), r the
+// smaller of its half-width w / 2 and depth. Every pixel any path of
 // which met any defect is removed from it. Pixels outside 0.95 of the clear aperture are left out
 // of both (the rim's own image is no defect).
 //
@@ -130,8 +131,15 @@ struct ExperimentResult {
 ExperimentResult evaluate_experiment(const ExperimentSpec& spec, const std::vector<ExperimentScene>& scenes,
                                      const Measurement* measured = nullptr);
 
-// The resolution of a rendered image (see "Noise" above).
+// The resolution of a rendered image (see "Noise" above): S samples per pixel on `display`.
+Resolution rendered_resolution(int samples_per_pixel, const DisplayGrid& display);
 Resolution rendered_resolution(const Scene& scene);
+
+// One image's CNR of one defect in its regions (contrast_to_noise with the image's resolution):
+// none (cnr NaN) when the defect has no finite pixel in the image or its surround fewer than 2 (a
+// decoder's NaN rows); 0 for a defect with no traced pixel within the regions' aperture (no
+// image). Means, spread and noise are NaN where they were not measured.
+ContrastResult measure_cnr(const std::vector<float>& image, const DefectRegions& g, double resolution);
 
 // The defect's traced image (see above) and the pixels some path of which met any defect.
 Region traced_defect_region(const Scene& scene, const RenderResult& render, int defect, double min_fraction);

@@ -27,10 +27,10 @@ std::string window_scene(const std::string& defects) {
            "seed: 3\n";
 }
 const std::string kBubble = "  - {type: bubble, center: [-2.0, 1.0, 0.0], radius: 0.8}\n";
-// A straight V scratch on the front face (z = -2), 0.4 mm wide and 0.2 mm deep, from (1, -4) to
-// (5, -1): 5 mm long on the flat face.
+// A straight, wide and shallow V scratch on the front face (z = -2), 0.8 mm wide and 0.05 mm deep,
+// from (1, -4) to (5, -1): 5 mm long on the flat face.
 const std::string kScratch =
-    "  - {type: scratch, surface: front, profile: V, width: 0.4, depth: 0.2, start: [1.0, -4.0], end: [5.0, -1.0]}\n";
+    "  - {type: scratch, surface: front, profile: V, width: 0.8, depth: 0.05, start: [1.0, -4.0], end: [5.0, -1.0]}\n";
 
 class Experiment : public test::TempDirTest {
 protected:
@@ -149,8 +149,8 @@ TEST_F(Experiment, AScratchHasItsOwnSizeColumnsAndASurroundAlongItsPath) {
         } else {
             ASSERT_EQ(row.at("kind"), "scratch");
             scratch = true;
-            EXPECT_EQ(std::stod(row.at("width_mm")), 0.4);
-            EXPECT_EQ(std::stod(row.at("depth_mm")), 0.2);
+            EXPECT_EQ(std::stod(row.at("width_mm")), 0.8);
+            EXPECT_EQ(std::stod(row.at("depth_mm")), 0.05);
             EXPECT_NEAR(std::stod(row.at("length_mm")), 5.0, 1e-9);  // a segment on the flat face
             for (const char* c : {"semi_axis_a_mm", "semi_axis_b_mm", "semi_axis_c_mm"}) EXPECT_EQ(row.at(c), "");
         }
@@ -158,8 +158,12 @@ TEST_F(Experiment, AScratchHasItsOwnSizeColumnsAndASurroundAlongItsPath) {
     EXPECT_TRUE(bubble);
     EXPECT_TRUE(scratch);
     // The surround: pixels whose centre ray (straight through the window) passes between
-    // r + 2 r + 2 px and r + 5 r + 4 px of the scratch's centre line, r = min(0.4 / 2, 0.2) = 0.2,
-    // px = 0.5: at a distance in (1.6, 3.2] mm of the segment from (1, -4) to (5, -1).
+    // R + 2 r + 2 px and R + 5 r + 4 px of the scratch's centre line, R = hypot(0.8 / 2, 0.05) =
+    // 0.40311 (the tube that holds the cross-section: the scratch reaches 0.4 mm to each side),
+    // r = min(0.8 / 2, 0.05) = 0.05, px = 0.5: at a distance in (1.50311, 2.65311] mm of the
+    // segment from (1, -4) to (5, -1). (A shell beyond a tube of radius r instead would start at
+    // 1.15 mm.) The centre rays cross the window straight, and the centre line lies on the front
+    // face, so the 3-D distance is the lateral one.
     const std::vector<DefectRegions>& g = r.regions[1];
     ASSERT_EQ(g.size(), 2u);
     ASSERT_EQ(g[1].kind, "scratch");
@@ -168,10 +172,11 @@ TEST_F(Experiment, AScratchHasItsOwnSizeColumnsAndASurroundAlongItsPath) {
         const double x = -6.0 + (k % 24 + 0.5) * 0.5, y = 6.0 - (k / 24 + 0.5) * 0.5;
         const double t = std::clamp(((x - 1) * 4 + (y + 4) * 3) / 25.0, 0.0, 1.0);
         const double d = std::hypot(x - (1 + 4 * t), y - (-4 + 3 * t));
-        EXPECT_GT(d, 1.6 - 1e-9) << k;
-        EXPECT_LE(d, 3.2 + 1e-9) << k;
+        const double R = std::hypot(0.4, 0.05);
+        EXPECT_GT(d, R + 1.1 - 1e-9) << k;
+        EXPECT_LE(d, R + 2.25 + 1e-9) << k;
     }
-    EXPECT_EQ(g[1].describe(), "scratch 0.4 x 0.2 mm, 5 mm long");
+    EXPECT_EQ(g[1].describe(), "scratch 0.8 x 0.05 mm, 5 mm long");
 }
 
 TEST_F(Experiment, MontageRowsShareOneColourScale) {
