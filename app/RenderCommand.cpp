@@ -78,10 +78,10 @@ std::string render_summary(const RenderArgs& a, const Scene& scene, const SceneR
     const int N = scene.camera.resolution[0], M = scene.camera.resolution[1];
     std::string files;
     if (a.pattern.empty())
-        files = fmt::format("ltm.npz (T {} x {}, {} nonzeros), features.exr and features.npz ({} images{}){}, run.json",
+        files = fmt::format("ltm.npz (T {} x {}, {} nonzeros), features.exr and features.npz ({} images{}), reference.exr, "
+                            "run.json",
                             static_cast<long>(N) * M, static_cast<long>(scene.display.resolution[0]) * scene.display.resolution[1],
-                            r.nnz, run.features.channels.size(), a.no_previews ? "" : ", previews in features/",
-                            scene.defects.empty() ? "" : ", reference.exr");
+                            r.nnz, run.features.channels.size(), a.no_previews ? "" : ", previews in features/");
     else
         files = fmt::format("image.exr and image.npz ({} x {} image of {}){}, run.json", N, M, a.pattern,
                             a.no_previews ? "" : ", image.png");
@@ -97,16 +97,10 @@ int run(const RenderArgs& a) {
         return 2;
     }
     if (!output_folder_ok("render", a.dir)) return 2;
-    std::vector<std::string> outputs = a.pattern.empty()
-                                           ? std::vector<std::string>{"ltm.npz", "run.json", "features.exr", "features.npz"}
-                                           : std::vector<std::string>{"image.exr", "image.npz", "image.png", "run.json"};
-    if (!a.overwrite)
-        for (const auto& f : outputs)
-            if (fs::exists(fs::path(a.dir) / f)) {
-                std::cerr << fmt::format("ltmsim render: {} exists; pass --overwrite to replace it\n",
-                                         (fs::path(a.dir) / f).string());
-                return 2;
-            }
+    std::vector<std::string> outputs;
+    for (const char* f : a.pattern.empty() ? render_folder_files() : std::vector<const char*>{"image.exr", "image.npz", "image.png", "run.json"})
+        outputs.push_back((fs::path(a.dir) / f).string());
+    if (!outputs_may_be_written("render", outputs, a.overwrite)) return 2;
     StageReport report;
     int status = 0;
     // auto and analytic trace closed forms where no defect cuts the glass: no mesh is built then.

@@ -321,6 +321,13 @@ TEST_F(RenderCommand, ExistingOutputsAreKeptUnlessOverwrite) {
     EXPECT_NE(again.err.find(out.string()), std::string::npos) << again.err;
     EXPECT_NE(again.err.find("--overwrite"), std::string::npos) << again.err;
     EXPECT_TRUE(snapshot(out) == first) << "the first render's files changed";
+    // Every file of a render counts, the reference among them.
+    const fs::path only_reference = dir / "only-reference";
+    fs::create_directories(only_reference);
+    fs::copy_file(out / "reference.exr", only_reference / "reference.exr");
+    const Outcome ref = ltmsim(render(scene, only_reference, "--threads 2"), dir);
+    EXPECT_EQ(ref.status, 2) << ref.err;
+    EXPECT_EQ(ref.err, "ltmsim render: " + (only_reference / "reference.exr").string() + " exists; pass --overwrite to replace it\n");
 
     const Outcome forced = ltmsim(render(scene, out, "--threads 2 --overwrite"), dir);
     EXPECT_EQ(forced.status, 0) << forced.err;
@@ -341,6 +348,16 @@ TEST_F(RenderCommand, OneSummaryLineOnSuccess) {
     EXPECT_NE(line.find(" images, previews in features/), reference.exr, run.json; 6400 paths in "), std::string::npos)
         << line;
     EXPECT_EQ(line.substr(line.size() - 9), " Mpaths/s") << line;
+    // A defect-free scene's render writes (and names) the reference too: its deflection map is
+    // measured against one as well.
+    std::string free_yaml = scene_yaml(3);
+    free_yaml.erase(free_yaml.find("defects:\n"), free_yaml.find("camera:") - free_yaml.find("defects:\n"));
+    const fs::path free = write("free.yaml", free_yaml);
+    const Outcome f = ltmsim(render(free, dir / "free", "--threads 2 --no-previews"), dir);
+    ASSERT_EQ(f.status, 0) << f.err;
+    ASSERT_EQ(f.lines().size(), 1u) << f.out;
+    EXPECT_NE(f.lines()[0].find(" images), reference.exr, run.json; "), std::string::npos) << f.lines()[0];
+    EXPECT_TRUE(fs::is_regular_file(dir / "free" / "reference.exr"));
     // A pattern's render names its image.
     const fs::path png = dir / "white.png";
     write_gray_png(png, kQ, kP, std::vector<std::uint8_t>(static_cast<std::size_t>(kP * kQ), 255));
