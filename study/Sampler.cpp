@@ -204,10 +204,13 @@ std::string describe(const io::Json& sampled) {
 }
 
 // The spec key that decides whether a defect fits, for a placement problem's key: delta_n and a
-// graded object's refusal (type) are their own; a scratch's depth and width too, and any other
-// problem of a scratch (it runs off its face) its length; an ellipsoid's its size.
+// graded object's refusal (type) are their own; a pit that does not reach its face (the problem
+// "surface_breaking") is placed by its center_depth; a scratch's depth and width decide
+// themselves, and any other problem of a scratch (it runs off its face) its length; an
+// ellipsoid's its size.
 std::string deciding_key(const DefectKindSpec& k, const std::string& problem_key) {
     if (problem_key == "type" || problem_key == "delta_n") return problem_key;
+    if (problem_key == "surface_breaking") return "center_depth";
     if (k.type == DefectType::Scratch) return problem_key == "depth" || problem_key == "width" ? problem_key : "length";
     return k.semi_axes ? "semi_axes" : "radius";
 }

@@ -319,6 +319,24 @@ max_attempts: 100
         << e.what();
 }
 
+TEST(Sampler, APitBelowItsFaceIsAnErrorAtItsCentreDepth) {
+    // A pit of radius 0.2 centred 1 mm below its face never reaches the face: its center_depth,
+    // not its radius, is what no position can mend.
+    const DatasetSpec s = parse_dataset_spec(R"(scene:
+  object: {type: window, thickness: 3.0, diameter: 25.0, ior: 1.5}
+samples: 3
+defects:
+  - {type: bubble, radius: 0.2, surface_breaking: true, center_depth: 1.0}
+max_attempts: 20
+)",
+                                             "spec.yaml");
+    const InputError e = draw_error(s, 0);
+    EXPECT_EQ(e.line, 5);
+    EXPECT_EQ(e.key_path, "defects[0].center_depth");
+    EXPECT_NE(std::string(e.what()).find("declared surface-breaking but lies entirely inside the glass"), std::string::npos)
+        << e.what();
+}
+
 // The issue's scenario: a 1 mm window, 3 bubbles per sample, radius {log_uniform: [0.1, 0.4]}. A
 // bubble of radius r fits where its centre is more than r from both faces, 1 - 2r of the
 // thickness, so redrawing the size with the position skews sizes toward small ones (median 0.176
