@@ -184,23 +184,18 @@ double ks_pvalue(long n, double d) {
 double chi_square_pvalue(double x, int nu) {
     if (nu < 1) throw std::invalid_argument("chi_square_pvalue: at least one degree of freedom");
     if (!(x > 0)) return 1;
-    const double y = 0.5 * x;
+    const double y = 0.5 * x, log_y = std::log(y);
     // Q(nu/2, y): even nu = 2m, e^-y sum_{j<m} y^j / j!  (A&S 26.4.5 via 6.5.13);
     // odd nu = 2m + 1, erfc(sqrt y) + e^-y sum_{j<m} y^(j+1/2) / Gamma(j + 3/2)  (A&S 26.4.4).
-    double sum = 0, term = 0;
+    // Each term y^a e^-y / Gamma(a + 1) is taken from its logarithm: e^-y alone underflows for
+    // y > 745 while the terms near a = y are of order 1 / sqrt y (nu = x = 2000 gives 0.496).
+    const auto term = [&](double a) { return std::exp(a * log_y - y - std::lgamma(a + 1)); };
+    double sum = 0;
     if (nu % 2 == 0) {
-        term = std::exp(-y);
-        for (int j = 0; j < nu / 2; ++j) {
-            sum += term;
-            term *= y / (j + 1);
-        }
+        for (int j = 0; j < nu / 2; ++j) sum += term(j);
     } else {
         sum = std::erfc(std::sqrt(y));
-        term = std::exp(-y) * std::sqrt(y) * 2 / std::sqrt(kPi);  // y^(1/2) / Gamma(3/2)
-        for (int j = 0; j < (nu - 1) / 2; ++j) {
-            sum += term;
-            term *= y / (j + 1.5);
-        }
+        for (int j = 0; j < (nu - 1) / 2; ++j) sum += term(j + 0.5);
     }
     return std::min(1.0, sum);
 }

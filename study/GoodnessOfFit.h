@@ -42,7 +42,8 @@ double kolmogorov_cdf_exact(long n, double d);
 // P(D_n < d) by the Pelz-Good series (an approximation for large n). Exposed for tests.
 double kolmogorov_cdf_pelz_good(long n, double d);
 
-// P(chi2_nu >= x) for nu >= 1 degrees of freedom.
+// P(chi2_nu >= x) for nu >= 1 degrees of freedom, by the finite series of A&S 26.4.4-5: nu / 2
+// terms, each from its logarithm.
 double chi_square_pvalue(double x, int nu);
 
 }  // namespace ltm

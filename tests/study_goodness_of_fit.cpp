@@ -110,6 +110,13 @@ TEST(ChiSquare, PValuesAtTheTextbookCriticalValues) {
     // nu = 2: exactly exp(-x / 2).
     EXPECT_LT(rel(chi_square_pvalue(3.0, 2), std::exp(-1.5)), 4 * tol::kEps);
     EXPECT_EQ(chi_square_pvalue(0.0, 1), 1.0);
+    // Many degrees of freedom, where e^(-x / 2) alone underflows (x > 1490): scipy.stats.chi2.sf.
+    // Each term is exp(L), L = a log y - y - lgamma(a + 1) from three parts of up to 15000 here, so
+    // L is good to about 4 eps 15000 = 1.3e-11 absolute and the term, and the sum of such
+    // positive terms, to that relative: 2e-11.
+    EXPECT_LT(rel(chi_square_pvalue(2000, 2000), 0.4957947558197845), 2e-11);
+    EXPECT_LT(rel(chi_square_pvalue(1600, 1501), 0.03747898979858334), 2e-11);
+    EXPECT_LT(rel(chi_square_pvalue(3000, 2000), 2.204698611389594e-43), 2e-11);
 }
 
 TEST(Distributions, CdfsOfTheRequestedLaws) {
