@@ -119,8 +119,9 @@ namespace {
 // Whether the ellipsoid certainly reaches into the glass: its centre is in it; for a sphere, the
 // centre is nearer to the glass than the radius (exact); for an ellipsoid, one of 1024 points
 // spread over its surface (a spherical Fibonacci lattice under its affine map) is in the glass.
-// False means "not shown", never "certainly not": only an ellipsoid centred outside the glass that
-// grazes it by less than the points' spacing is missed.
+// False means "not shown", never "certainly not": an ellipsoid centred outside the glass whose
+// part in the glass falls between the points (spaced about 0.1 of its semi-axes: a graze, or a
+// thin slab of glass crossing it) is missed, and only the advice that uses this is withheld.
 bool reaches_glass(const Lens& lens, const Defect& d, double sdf) {
     if (sdf > 0) return true;
     if (d.is_sphere()) return sdf > -d.semi_axes.x;

@@ -376,7 +376,7 @@ TEST_F(MeshExport, ObjIsTheMeshExactlyWithoutAMaterialFile) {
 
 // Two tetrahedra sharing one vertex (non-manifold there): the file holds the mesh as it is, its 7
 // vertices and 8 faces in order (no face is split off with copies of its vertices, as OpenMesh's
-// writer did); OpenMesh's reader, which cannot hold that vertex, splits on reading instead.
+// writer would split it); OpenMesh's reader, which cannot hold that vertex, splits on reading.
 TEST_F(MeshExport, NonManifoldMeshIsWrittenAsItIs) {
     TriMesh mesh = tetrahedron(kTetraTags);
     // The second one is the first reflected through its vertex 0; a point reflection reverses
