@@ -142,8 +142,8 @@ TEST(Deflate, AStreamOverItsLimitHasSizeZeroAndMisuseIsRefused) {
 }
 
 // A scratch buffer whose growth fails (std::bad_alloc) is left empty, not with the size it had:
-// the next, smaller request gets fresh room (before, it got a null pointer and the next PNG or
-// EXR write on that thread crashed). AddressSanitizer reports an impossible allocation instead
+// the next, smaller request gets fresh room (a null pointer there would crash the next PNG or
+// EXR write on that thread). AddressSanitizer reports an impossible allocation instead
 // of throwing, so the test runs in the plain build only.
 TEST(Deflate, AScratchBufferWhoseGrowthFailsIsEmptyNotDangling) {
 #if defined(__SANITIZE_ADDRESS__)
