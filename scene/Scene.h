@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,6 +75,10 @@ struct Scene {
     MeshOptions mesh;
     TracingDesc tracing;
     std::uint64_t seed = 1;
+    // The seed of the deflection map's golden reference (study/SceneRun.h): when given, every scene
+    // of the same object with the same reference_seed is measured against the same reference,
+    // whatever its own seed (a dataset's samples); when not, one derived from `seed`.
+    std::optional<std::uint64_t> reference_seed;
 
     // Where the file gave each value, by key path from the scene's root ("object.diameter",
     // "camera.size", "defects[2]" for a defect's mapping, "defects[2].radius"), and the scene's

@@ -82,7 +82,7 @@ Json scene_to_json(const Scene& s) {
     if (s.object.index_field.graded()) object["index_field"] = index_field_json(s.object.index_field);
     Json defects = Json::array();
     for (const Defect& d : s.defects) defects.push_back(defect_json(d));
-    return {{"source", s.source},
+    Json j = {{"source", s.source},
             {"object", object},
             {"defects", defects},
             {"camera",
@@ -102,6 +102,8 @@ Json scene_to_json(const Scene& s) {
               {"index_tolerance", json_number(s.mesh.index_tolerance)}}},
             {"tracing", tracing_to_json(s.tracing)},
             {"seed", s.seed}};
+    if (s.reference_seed) j["reference_seed"] = *s.reference_seed;
+    return j;
 }
 
 Json tracing_to_json(const TracingDesc& t) {

@@ -566,7 +566,7 @@ std::string SceneParser::warning(const std::string& key, const std::string& mess
 Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     Scene scene;
     scene.source = file();
-    const char* keys = "a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed)";
+    const char* keys = "a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed, reference_seed)";
     if (!root.IsDefined() || root.IsNull()) {
         if (whole_file) fail({1, 1}, "", "the scene file is empty: expected a mapping with at least the key 'object'");
         // An undefined node (a key the caller looked up that is not there) has no mark.
@@ -594,7 +594,7 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
     };
 
     KeyRule rule;
-    rule.keys = {"object", "defects", "camera", "display", "mesh", "tracing", "seed"};
+    rule.keys = {"object", "defects", "camera", "display", "mesh", "tracing", "seed", "reference_seed"};
     walk(root, "", rule, [&](const Item& e) {
         const Loc at = e.value_loc();
         if (e.key == "object") {
@@ -630,6 +630,8 @@ Scene SceneParser::run(const YAML::Node& root, bool whole_file) const {
             parse_tracing(e, scene.tracing);
         } else if (e.key == "seed") {
             scene.seed = seed(e.value, at, "seed");
+        } else if (e.key == "reference_seed") {
+            scene.reference_seed = seed(e.value, at, "reference_seed");
         }
     });
     if (!have_object) fail(loc_of(root), "object", "missing required key 'object'");

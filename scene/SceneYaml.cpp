@@ -224,6 +224,7 @@ std::string scene_to_yaml(const Scene& s) {
     }
 
     out.put(0, "seed", fmt::format("{}", s.seed));
+    if (s.reference_seed) out.put(0, "reference_seed", fmt::format("{}", *s.reference_seed));
     return out.text();
 }
 

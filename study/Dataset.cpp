@@ -134,8 +134,9 @@ struct SampleOutcome {
 };
 
 // Draws, renders and writes sample i into samples/<i> (atomically). Runs in the caller's task
-// arena: the render shares its threads with the other samples in flight.
-SampleOutcome produce_sample(const DatasetSpec& spec, long i, const fs::path& samples) {
+// arena: the render shares its threads with the other samples in flight. `references`, if not
+// null, holds the golden reference of the spec's object (the object does not vary: one entry).
+SampleOutcome produce_sample(const DatasetSpec& spec, long i, const fs::path& samples, ReferenceCache* references) {
     SampleOutcome out;
     out.index = i;
     StageReport report;
@@ -151,6 +152,7 @@ SampleOutcome produce_sample(const DatasetSpec& spec, long i, const fs::path& sa
         SceneRunOptions so;
         so.representation = auto_representation(solid);
         so.threads = 0;  // the arena of the dataset run
+        so.reference_cache = references;
         const SceneRun run = run_scene(scene, solid, so, &report);
         stage = "ground-truth";
         StageTimer t_gt(&report, "ground-truth");
@@ -300,6 +302,11 @@ DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& o) {
     std::atomic<bool> stop{false};
     size_t next = 0;
     long done = sum.kept, failed = 0;
+    // The samples share their object's reference (their scenes give the spec's seed as their
+    // reference_seed, study/Sampler.h): rendered by the first samples in flight, then found. An
+    // object that varies has one reference per sample, which nothing keeps.
+    ReferenceCache references;
+    ReferenceCache* const shared_reference = varied_object_keys(spec).empty() ? &references : nullptr;
     tbb::task_arena arena(threads);
     arena.execute([&] {
         tbb::parallel_pipeline(
@@ -313,7 +320,7 @@ DatasetSummary run_dataset(const DatasetSpec& spec, const DatasetOptions& o) {
                                              return pending[next++];
                                          }) &
                 tbb::make_filter<long, SampleOutcome>(tbb::filter_mode::parallel,
-                                                      [&](long i) { return produce_sample(spec, i, samples); }) &
+                                                      [&](long i) { return produce_sample(spec, i, samples, shared_reference); }) &
                 tbb::make_filter<SampleOutcome, void>(tbb::filter_mode::serial_out_of_order, [&](const SampleOutcome& r) {
                     for (const Stage& st : r.stages) {
                         if (!sum.stage_seconds.count(st.name)) sum.stage_order.push_back(st.name);

@@ -10,6 +10,7 @@ std::string ReferenceCache::key(const Scene& scene, std::uint64_t seed, Represen
     auto j = scene_to_json(defect_free(scene));
     j.erase("source");  // the file a scene came from does not change its paths
     j.erase("seed");    // the reference's own seed follows
+    j.erase("reference_seed");
     return j.dump() + "|seed " + std::to_string(seed) + "|" + to_string(representation);
 }
 

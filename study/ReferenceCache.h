@@ -11,7 +11,8 @@
 // that seed and the tracer's representation only, so a value computed for one scene is the value
 // any other scene with the same key would compute. The key holds all of these (the scene as JSON
 // without its defects and without the file it came from); scenes whose key differs share nothing.
-// Dataset samples have seeds of their own, so their keys differ and each renders its own reference.
+// Dataset samples have seeds of their own but one reference_seed (the spec's seed), so the samples
+// of one object share one reference.
 #include <cstdint>
 #include <map>
 #include <mutex>

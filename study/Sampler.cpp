@@ -288,6 +288,9 @@ SampleDraw draw_sample(const DatasetSpec& spec, long index) {
     Scene scene = spec.base;
     scene.defects.clear();
     scene.seed = s.seed;
+    // Every sample is measured against the golden reference of the spec's seed (the base scene's
+    // reference_seed if it gives one): one reference for all samples of one object.
+    if (!scene.reference_seed) scene.reference_seed = spec.seed;
     // 2. The object.
     if (spec.object.any()) {
         Rng rng(s.seed, kSamplingStream + 2);

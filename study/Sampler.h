@@ -34,8 +34,11 @@
 // every size ("defects[1]: sample 17: its 12 defects do not fit together ..."). A truncated normal
 // with no value in its range in max_attempts draws, or an arc whose length closes its circle, is
 // an InputError at its key too.
-// The scene is written with scene_to_yaml and read back with the strict loader, and the scene
-// read back is the one rendered: what scene.yaml says is what was rendered.
+// The scene's seed is mix_seed(spec seed, index); its reference_seed is the spec's seed (unless
+// the spec's scene gives one), so that every sample of one object is measured against one golden
+// reference (study/SceneRun.h). The scene is written with scene_to_yaml and read back with the
+// strict loader, and the scene read back is the one rendered: what scene.yaml says is what was
+// rendered.
 #include <cstdint>
 #include <string>
 #include <vector>

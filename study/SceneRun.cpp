@@ -92,8 +92,18 @@ FeatureOptions resolved_feature_options(const Scene& s, FeatureOptions o) {
     return o;
 }
 
+namespace {
+
+// The seed the reference's seed is mixed from: the scene's reference_seed if it gives one, else its
+// render seed.
+std::uint64_t reference_base_seed(const Scene& scene, const RenderOptions& options) {
+    return scene.reference_seed ? *scene.reference_seed : render_seed(scene, options);
+}
+
+}  // namespace
+
 std::uint64_t reference_seed(const Scene& scene, const RenderOptions& options) {
-    return mix_seed(render_seed(scene, options), kReferenceStream);
+    return mix_seed(reference_base_seed(scene, options), kReferenceStream);
 }
 
 std::vector<float> defect_free_reference(const Scene& scene, Representation representation, const RenderOptions& options,
@@ -109,10 +119,10 @@ std::vector<float> defect_free_reference(const Scene& scene, Representation repr
             return std::move(*found);
         }
     }
-    // The defect-free scene whose render seed is reference_seed: its own seed is the scene's
-    // render seed, mixed with kReferenceStream by RenderOptions::stream.
+    // The defect-free scene whose render seed is reference_seed: its own seed is
+    // reference_base_seed, mixed with kReferenceStream by RenderOptions::stream.
     Scene free = defect_free(scene);
-    free.seed = render_seed(scene, options);
+    free.seed = reference_base_seed(scene, options);
     const Solid free_solid = build_solid(free, nullptr, representation != Representation::MeshOnly);
     TracerOptions o;
     o.representation = ref_rep;

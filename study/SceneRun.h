@@ -7,11 +7,13 @@
 // of the defect-free object (docs/features.md). An instrument measures that reference separately,
 // on a golden sample, and its measurement carries noise of its own. So does this one: the same
 // scene without its defects is rendered at every pixel with random numbers of its own, the seed
-// reference_seed (mix_seed of the scene's render seed and kReferenceStream, trace/Rng.h), which
-// no render of the scene itself uses. Away from the defects the deflection map therefore shows the
+// reference_seed (mix_seed of the scene's render seed, or of its `reference_seed` where it gives
+// one, and kReferenceStream, trace/Rng.h), which no render of the scene itself uses. Away from the defects the deflection map therefore shows the
 // difference of two independent Monte Carlo estimates of the same means (its noise is sqrt 2
-// times one render's), as the difference of two measurements would. The seed depends on the
-// scene's seed (and RenderOptions::stream) only, so the reference, and every deflection, is
+// times one render's), as the difference of two measurements would. Scenes of one object that
+// give one `reference_seed` (a dataset's samples) share one reference, as the parts of a product
+// are measured against one golden sample. The seed depends on the scene's seeds (and
+// RenderOptions::stream) only, so the reference, and every deflection, is
 // bit-identical for any thread count. It costs one more render of the defect-free object (in the
 // analytic representation, whatever the scene's), whose rows are reduced to their means as they
 // pass (a RowSink), so it never holds that object's T.

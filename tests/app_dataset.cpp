@@ -374,6 +374,8 @@ TEST_F(Dataset, RenderingASamplesSceneReproducesItBitForBit) {
     fs::create_directories(dir / "again");
     for (const char* i : {"000001", "000006"}) {
         const fs::path s = dir / "full" / "samples" / i;
+        // Every sample is measured against the golden reference of the spec's seed (1).
+        EXPECT_NE(slurp(s / "scene.yaml").find("\nreference_seed: 1\n"), std::string::npos) << i;
         const auto r = run("render " + q(s / "scene.yaml") + " -o " + q(dir / "again" / i) + " --threads 1");
         ASSERT_EQ(r.status, 0) << r.err;
         EXPECT_EQ(slurp(dir / "again" / i / "features.exr"), slurp(s / "features.exr")) << i;

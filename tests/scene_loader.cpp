@@ -60,7 +60,7 @@ TEST(SceneLoaderUnknownKey, TopLevelSuggestsTheNearestKey) {
 TEST(SceneLoaderUnknownKey, TopLevelWithoutNearMatchListsTheValidKeys) {
     EXPECT_EQ(error_of(kLens + "colour: red\n"),
               "scene.yaml:8:1: colour: unknown key 'colour'; valid keys are: object, defects, camera, display, "
-              "mesh, tracing, seed");
+              "mesh, tracing, seed, reference_seed");
 }
 
 TEST(SceneLoaderUnknownKey, InObjectSuggestsTheNearestKey) {
@@ -267,7 +267,7 @@ TEST(SceneLoaderStructure, MalformedYaml) {
 TEST(SceneLoaderStructure, EmptyFileAndWrongRoot) {
     EXPECT_EQ(error_of(""), "scene.yaml:1:1: the scene file is empty: expected a mapping with at least the key 'object'");
     EXPECT_EQ(error_of("- object\n"),
-              "scene.yaml:1:1: expected a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed) at "
+              "scene.yaml:1:1: expected a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed, reference_seed) at "
               "the top level, got a list of 1 item");
 }
 

@@ -218,7 +218,7 @@ TEST(InlineScene, NotAMapping) {
     } catch (const SceneError& e) {
         EXPECT_EQ(std::string(e.what()),
                   "spec.yaml:1:8: scene: expected a mapping of scene keys (object, defects, camera, display, mesh, "
-                  "tracing, seed), got a list of 2 items");
+                  "tracing, seed, reference_seed), got a list of 2 items");
     }
     try {
         parse_scene_node(root["missing"], "spec.yaml", "scene");
@@ -226,7 +226,7 @@ TEST(InlineScene, NotAMapping) {
     } catch (const SceneError& e) {
         EXPECT_EQ(e.key_path, "scene");
         EXPECT_EQ(e.message,
-                  "expected a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed), got an empty value");
+                  "expected a mapping of scene keys (object, defects, camera, display, mesh, tracing, seed, reference_seed), got an empty value");
     }
 }
 

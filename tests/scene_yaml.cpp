@@ -126,6 +126,8 @@ std::string differences(const Scene& a, const Scene& b) {
     // A sample scene's split_depth means nothing and is not written (scene/SceneYaml.cpp).
     if (a.tracing.estimator == Estimator::Split) d.same("tracing.split_depth", a.tracing.split_depth, b.tracing.split_depth);
     d.same("seed", a.seed, b.seed);
+    d.same("reference_seed given", a.reference_seed.has_value(), b.reference_seed.has_value());
+    if (a.reference_seed && b.reference_seed) d.same("reference_seed", *a.reference_seed, *b.reference_seed);
     return d.text();
 }
 
@@ -259,6 +261,10 @@ TEST(SceneYaml, EveryFieldWithAwkwardValues) {
     expect_round_trip(s, "awkward");
     s.seed = std::numeric_limits<std::uint64_t>::max() - 1;
     expect_round_trip(s, "awkward, seed 2^64-2");
+    s.reference_seed = std::numeric_limits<std::uint64_t>::max();
+    expect_round_trip(s, "awkward, reference_seed 2^64-1");
+    s.reference_seed = 0;
+    expect_round_trip(s, "awkward, reference_seed 0");
 }
 
 TEST(SceneYaml, IndexFieldsOfEveryTypeOnEveryObject) {

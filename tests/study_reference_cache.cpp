@@ -125,3 +125,35 @@ TEST(ReferenceCache, AnotherSeedOrObjectSharesNothing) {
         expect_same_reference(alone, shared);
     }
 }
+
+// A dataset's samples: scenes of one object with seeds of their own and one reference_seed share
+// one reference, the same as the defect-free object rendered with the reference seed derived from
+// that reference_seed, found in the cache by every scene after the first. Without reference_seed
+// the seeds give two references.
+TEST(Reference, ScenesOfOneObjectWithOneReferenceSeedShareItWhateverTheirSeeds) {
+    const test::Built a = test::build(window_scene(kBubbleA, 3) + "reference_seed: 11\n");
+    const test::Built b = test::build(window_scene(kBubbleB, 4) + "reference_seed: 11\n");
+    const SceneRun ra = run(a, nullptr), rb = run(b, nullptr);
+    ASSERT_EQ(ra.reference.size(), rb.reference.size());
+    for (size_t i = 0; i < ra.reference.size(); ++i) EXPECT_TRUE(same(ra.reference[i], rb.reference[i])) << i;
+    // That reference is the defect-free object's MeanX, MeanY rendered with seed
+    // mix_seed(11, kReferenceStream).
+    test::Built free = test::build(window_scene(""));
+    free.scene.seed = reference_seed(a.scene, RenderOptions{});
+    EXPECT_EQ(free.scene.seed, mix_seed(11, kReferenceStream));
+    const SceneRun f = run(free, nullptr);
+    for (size_t k = 0; k < ra.reference.size() / 2; ++k) {
+        EXPECT_TRUE(same(ra.reference[2 * k], f.features.channel("MeanX")[k])) << k;
+        EXPECT_TRUE(same(ra.reference[2 * k + 1], f.features.channel("MeanY")[k])) << k;
+    }
+    ReferenceCache cache;
+    run(a, &cache);
+    const SceneRun shared = run(b, &cache);
+    EXPECT_EQ(shared.reference_reused, 24 * 24);
+    expect_same_reference(rb, shared);
+    // Seeds 3 and 4 without reference_seed: two independent references.
+    const SceneRun a3 = run(test::build(window_scene(kBubbleA, 3)), nullptr), b4 = run(test::build(window_scene(kBubbleB, 4)), nullptr);
+    long differ = 0;
+    for (size_t i = 0; i < a3.reference.size(); ++i) differ += !same(a3.reference[i], b4.reference[i]);
+    EXPECT_GT(differ, static_cast<long>(a3.reference.size() / 4));
+}
