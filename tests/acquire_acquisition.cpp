@@ -10,6 +10,7 @@
 
 #include "acquire/Acquisition.h"
 #include "acquire/CounterRng.h"
+#include "acquire/Instrument.h"
 #include "tests/Tolerances.h"
 
 namespace {
@@ -208,3 +209,14 @@ TEST(Acquisition, StripeSuggestionsNameTheWidthsTheirCountsUse) {
 }
 
 }  // namespace
+
+// Every channel compute_features makes has an instrument (acquire/Instrument.h's table): a feature
+// added without one would be measured by nothing, and the experiment's measured table would have
+// no number for it. The deflection channels are measured through MeanX and MeanY.
+TEST(Instrument, EveryFeatureChannelHasAnInstrument) {
+    for (const std::string& ch : ltm::feature_channel_names(false)) {
+        const ltm::acquire::AcquireOptions o = ltm::acquire::instrument_for(ch, 500, 500);
+        EXPECT_GE(o.patterns, 1) << ch;
+    }
+    EXPECT_THROW(ltm::acquire::instrument_for("NoSuchChannel", 500, 500), std::invalid_argument);
+}
