@@ -28,7 +28,7 @@ const std::vector<std::pair<Method, std::vector<std::string>>>& channels_by_meth
 AcquireOptions options_for(Method m, int P, int Q) {
     AcquireOptions o;
     o.method = m;
-    o.dark_block = std::min({60, P, Q});  // features.exr's DarkField block
+    o.dark_block = automatic_dark_block({Q, P, 0, 0});  // features.exr's DarkField block
     switch (m) {
         case Method::Fields: o.patterns = 2; break;
         case Method::Gray: o.patterns = 2 * (ceil_log2(P) + ceil_log2(Q)) + 6; break;

@@ -194,7 +194,7 @@ int run(const AcquireArgs& a) {
     o.hadamard = a.family == "hadamard";
     o.period = a.period;
     o.sigmas = a.sigmas;
-    o.dark_block = std::min({60, g.display.P, g.display.Q});  // features.exr's DarkField block (write_features)
+    o.dark_block = automatic_dark_block(g.display);  // features.exr's DarkField block (write_features)
     o.threads = a.threads;
     for (int K : Ks) {
         o.patterns = K;
@@ -243,7 +243,7 @@ int run(const AcquireArgs& a) {
             defects.push_back({{"defect", d.defect},
                                {"kind", d.kind},
                                {"label", d.describe()},
-                               {"size", regions_json({d})["defects"][0]["size"]},
+                               {"size", d.size_json()},
                                {"channels", ch},
                                {"bright_field", cnr_json(cnrs(kr.r.bright.channel("BrightField"),
                                                               kr.repeat.bright.channel("BrightField"),

@@ -231,7 +231,7 @@ std::optional<std::vector<float>> read_reference(const std::string& dir, int cam
 FeatureImages write_features(const std::string& dir, const CsrMatrix& T, const RenderGeometry& g,
                              const FeatureOptions& options, const std::vector<float>* reference) {
     FeatureOptions o = options;
-    if (o.dark_block < 0) o.dark_block = std::min({60, g.display.P, g.display.Q});  // automatic
+    if (o.dark_block < 0) o.dark_block = automatic_dark_block(g.display);
     const FeatureImages f = compute_features(T, g.camera_columns, g.camera_rows, g.display, o, reference);
     write_feature_images(dir, f, g.camera);
     return f;

@@ -56,6 +56,7 @@
 // Every per-row quantity is computed in double and stored as float (counts and index differences
 // are exact below 2^24). Rows are processed in parallel (TBB); each value depends on its own row
 // only, so the result is bit-identical whatever the number of threads.
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -75,6 +76,11 @@ struct FeatureOptions {
     double energy_fraction = 0.99;  // Robust*: fraction of the row's energy kept, in (0, 1]
     int dark_block = 60;            // DarkField: side of the dark centred block, in [0, min(P, Q)]
 };
+
+// The DarkField block that an automatic dark_block (< 0, as render, dataset and experiment leave
+// it) stands for on `display`: 60 display pixels, or the display's smaller side if less. An
+// acquisition measures the dark field with the same block.
+inline int automatic_dark_block(const DisplayGrid& display) { return std::min({60, display.P, display.Q}); }
 
 struct FeatureImages {
     int width = 0, height = 0;  // camera columns N and rows M

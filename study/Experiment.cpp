@@ -292,12 +292,16 @@ std::vector<DefectRegions> experiment_regions(const ExperimentSpec& spec, const 
     return out;
 }
 
+io::Json DefectRegions::size_json() const {
+    io::Json j = io::Json::object();
+    for (const auto& [k, v] : size) j[k] = v;
+    return j;
+}
+
 io::Json regions_json(const std::vector<DefectRegions>& regions) {
     io::Json defects = io::Json::array();
     for (const DefectRegions& g : regions) {
-        io::Json size = io::Json::object();
-        for (const auto& [k, v] : g.size) size[k] = v;
-        defects.push_back({{"defect", g.defect}, {"kind", g.kind}, {"size", size}, {"defect_pixels", g.defect_pixels.pixels},
+        defects.push_back({{"defect", g.defect}, {"kind", g.kind}, {"size", g.size_json()}, {"defect_pixels", g.defect_pixels.pixels},
                            {"surround_pixels", g.surround.pixels}});
     }
     return {{"defects", defects}};
@@ -353,8 +357,7 @@ Resolution rendered_resolution(int samples_per_pixel, const DisplayGrid& display
 }
 
 Resolution rendered_resolution(const Scene& scene) {
-    return rendered_resolution(scene.camera.samples_per_pixel,
-                               {scene.display.resolution[0], scene.display.resolution[1], scene.display.size[0], scene.display.size[1]});
+    return rendered_resolution(scene.camera.samples_per_pixel, display_grid(scene));
 }
 
 ContrastResult measure_cnr(const std::vector<float>& image, const DefectRegions& g, double resolution) {

@@ -87,6 +87,8 @@ struct DefectRegions {
     Region defect_pixels, surround;
     // "bubble r = 0.0997 mm", "scratch 0.05 x 0.02 mm, 4 mm long": for labels.
     std::string describe() const;
+    // {"semi_axis_a_mm": a, ...}: the size as regions.json and acquire's report give it.
+    io::Json size_json() const;
 };
 // A defect's size as contrast.csv and regions.json give it, in mm, by kind: semi_axis_a_mm,
 // semi_axis_b_mm, semi_axis_c_mm for the ellipsoids (bubble, particle, inhomogeneity; all three

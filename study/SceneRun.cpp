@@ -88,7 +88,7 @@ DisplayGrid display_grid(const Scene& s) {
 }
 
 FeatureOptions resolved_feature_options(const Scene& s, FeatureOptions o) {
-    if (o.dark_block < 0) o.dark_block = std::min({60, s.display.resolution[0], s.display.resolution[1]});
+    if (o.dark_block < 0) o.dark_block = automatic_dark_block(display_grid(s));
     return o;
 }
 
